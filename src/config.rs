@@ -1,0 +1,222 @@
+//! Every number a user tunes, in one place, each with its unit and source.
+//!
+//! Sources: "report" is the lab report (`shared/seed/lab1-report.txt`),
+//! "data" the lab's measurements (`tests/data/lab1/`), "PAPERBOT" the
+//! project's fact sheet (`shared/docs/PAPERBOT.md`). Values are written in
+//! the units people use (mm, degrees, rad/s) and converted to the fixed-point
+//! types by `const fn`s at compile time: no float code reaches the robot.
+//! To refit from new measurements: `cargo run --example fit -- <csv>` prints
+//! constants ready to paste here.
+
+use crate::math::{Angle, Length};
+
+/// Robot geometry.
+pub mod geometry {
+    use super::*;
+
+    /// Wheel radius: 20 mm (report 3.2 uses r = 0.02 m; its "200 mm
+    /// diameter" is a typo).
+    pub const WHEEL_RADIUS: Length = Length::from_mm_f64(20.0);
+    /// Distance between the wheels: 85 mm (report 1).
+    pub const AXLE_LENGTH: Length = Length::from_mm_f64(85.0);
+    /// D: from the rotation axis (axle midpoint) to the car's reference
+    /// point, mm. The report gives no number; the team's later estimator used
+    /// 56 mm (PAPERBOT). Must stay below 128 mm (state update's Q24).
+    pub const ROTATION_TO_REFERENCE: Length = Length::from_mm_f64(56.0);
+    /// The paper skid drags about 70 mm behind the axle (report 1).
+    pub const SKID_BEHIND_AXLE: Length = Length::from_mm_f64(70.0);
+
+    /// Where a lidar sits relative to the car's reference point, in the car's
+    /// frame (mm forward, mm right), and which way it looks.
+    #[derive(Clone, Copy, PartialEq, Eq, Debug)]
+    pub struct LidarMount {
+        pub forward: Length,
+        pub right: Length,
+        /// Beam direction relative to the heading (clockwise).
+        pub direction: Angle,
+    }
+
+    /// Front lidar: 50 mm behind the reference point, looking forward
+    /// (PAPERBOT, from the team's later estimator; lateral offset not
+    /// recorded, taken as 0).
+    pub const FRONT_LIDAR: LidarMount =
+        LidarMount { forward: Length::from_mm_f64(-50.0), right: Length::ZERO, direction: Angle::ZERO };
+    /// Right lidar: 53 mm left of the reference point, looking right
+    /// (PAPERBOT, from the team's later estimator).
+    pub const RIGHT_LIDAR: LidarMount =
+        LidarMount { forward: Length::ZERO, right: Length::from_mm_f64(-53.0), direction: Angle::QUARTER_TURN };
+
+    const _: () = assert!(ROTATION_TO_REFERENCE.0 >= 0 && ROTATION_TO_REFERENCE.0 < (128 << 16));
+}
+
+/// The servo actuator model: eight lines from command (0..180) to speed, and
+/// the command ranges they were measured on (report 3.2, data
+/// `servo_runs.csv`). Forward and backward lines give wheel speed in rad/s
+/// (car speed = wheel speed * wheel radius); cw and ccw lines give the car's
+/// turn rate in rad/s. Every line is a magnitude (see `model::actuator`).
+pub mod actuators {
+    use super::geometry::WHEEL_RADIUS;
+    use crate::model::actuator::{ActuatorModel, MotionLines, Trim, WheelLine};
+
+    /// Forward: left `y = 0.14 x - 8.205` on 103..112, right
+    /// `y = -0.146 x + 15.85` on 57..66 (data says -0.146; the report printed
+    /// `0.145 x - 15.85`, which is negative over the whole range).
+    pub const FORWARD: MotionLines =
+        MotionLines { left: WheelLine::new(0.14, -8.205, 103, 112), right: WheelLine::new(-0.146, 15.85, 57, 66) };
+    /// Backward: left `y = -0.205 x + 19.77` on 58..70, right `y = 0.195 x - 13.95` on 99..111.
+    pub const BACKWARD: MotionLines =
+        MotionLines { left: WheelLine::new(-0.205, 19.77, 58, 70), right: WheelLine::new(0.195, -13.95, 99, 111) };
+    /// Clockwise: left `y = 0.0862 x - 6.2423` on 100..111, right `y = 0.1431 x - 13.442` on 110..117.
+    pub const CW: MotionLines = MotionLines {
+        left: WheelLine::new(0.0862, -6.2423, 100, 111),
+        right: WheelLine::new(0.1431, -13.442, 110, 117),
+    };
+    /// Counter-clockwise: left `y = -0.0908 x + 8.6171` on 60..71, right `y = -0.0344 x + 4.7604` on 43..70.
+    pub const CCW: MotionLines =
+        MotionLines { left: WheelLine::new(-0.0908, 8.6171, 60, 71), right: WheelLine::new(-0.0344, 4.7604, 43, 70) };
+
+    /// Left servo trim in command steps (moves its stop point from 90).
+    /// Tune on the robot with the `trim` command until the wheel stands still.
+    pub const LEFT_TRIM: Trim = Trim::from_f64(0.0);
+    /// Right servo trim in command steps.
+    pub const RIGHT_TRIM: Trim = Trim::from_f64(0.0);
+
+    pub const MODEL: ActuatorModel = ActuatorModel {
+        forward: FORWARD,
+        backward: BACKWARD,
+        cw: CW,
+        ccw: CCW,
+        wheel_radius: WHEEL_RADIUS,
+        left_trim: LEFT_TRIM,
+        right_trim: RIGHT_TRIM,
+    };
+}
+
+/// Servo pulses (FS90R continuous servos on 50 Hz PWM).
+pub mod servo {
+    /// Pulse width for command 0, us: the ESP8266 Arduino core's
+    /// `Servo.write()` mapping of the lab's time (PAPERBOT).
+    pub const PULSE_AT_0_US: u32 = 544;
+    /// Pulse width for command 180, us (PAPERBOT).
+    pub const PULSE_AT_180_US: u32 = 2400;
+    /// Pulses are clamped to this window whatever the command and trim: the
+    /// FS90R's rated 700..2300 us (FS90R datasheet).
+    pub const SAFE_MIN_US: u32 = 700;
+    pub const SAFE_MAX_US: u32 = 2300;
+    /// Frame period: 20 ms (50 Hz servo frames).
+    pub const FRAME_US: u32 = 20_000;
+}
+
+/// The two lidar lines (report 3.3, data `lidar_*.csv`), mapping a reading
+/// (mm) to the distance from the car's reference point (mm).
+pub mod lidar {
+    use crate::model::lidar::LidarModel;
+
+    /// Readings below this are inside the car (both lines give < 0 there).
+    pub const MIN_READING_MM: u16 = 20;
+    /// Readings past this are beyond the VL53L0X's reliable range in its
+    /// default mode (1.2 m, datasheet): reported as no target.
+    pub const MAX_READING_MM: u16 = 1200;
+    /// Front: `distance = 0.9849 reading - 56.2563` (report 3.3; the data's
+    /// direction of the fit).
+    pub const FRONT: LidarModel = LidarModel::new(0.9849, -56.2563, MIN_READING_MM, MAX_READING_MM);
+    /// Right: `distance = 0.9867 reading - 70.4578` (report 3.3).
+    pub const RIGHT: LidarModel = LidarModel::new(0.9867, -70.4578, MIN_READING_MM, MAX_READING_MM);
+
+    /// Measurement timing budget, us (VL53L0X default 33 ms; at most one
+    /// reading per 33 ms per lidar).
+    pub const TIMING_BUDGET_US: u32 = 33_000;
+    /// Wait after releasing XSHUT before talking to the chip, us (datasheet
+    /// boot time 1.2 ms, with margin).
+    pub const BOOT_TIME_US: u32 = 2_000;
+}
+
+/// The MPU9250's AK8963 magnetometer.
+pub mod compass {
+    use super::Angle;
+    use crate::model::compass::{Axis, AxisMap, CompassModel, MagCalibration};
+
+    /// Hard-iron biases x 79, y 35, z 2 counts; soft-iron scales x 0.679012,
+    /// y 0.833333, z 3.055556 (report 2.4, Figure 4).
+    pub const CALIBRATION: MagCalibration = MagCalibration::from_f64([79.0, 35.0, 2.0], [0.679012, 0.833333, 3.055556]);
+    /// Declination at UCLA: 11 deg 56 min east (report 2.4; the course
+    /// sketch's `11 + (56/60)` is 11 in integer arithmetic). 0 for a frame
+    /// whose x is magnetic north.
+    pub const DECLINATION: Angle = Angle::from_degrees_f64(11.0 + 56.0 / 60.0);
+    /// The magnetometer's +x faced north when the car did (report 2.4), so
+    /// its x is the car's front; the AK8963 frame is right-handed with z
+    /// down, so its y is the car's right. (Its axes are not the
+    /// accelerometer's: x and y swapped, z inverted.)
+    pub const AXES: AxisMap = AxisMap { forward: Axis::X, right: Axis::Y };
+
+    pub const MODEL: CompassModel = CompassModel { calibration: CALIBRATION, axes: AXES, declination: DECLINATION };
+
+    /// Calibration sweep: samples to collect while turning in place.
+    pub const CALIBRATION_SAMPLES: u16 = 1000;
+    /// A sweep must visit this many of 12 30-degree sectors to be accepted.
+    pub const CALIBRATION_MIN_SECTORS: u8 = 11;
+}
+
+/// Wiring (PAPERBOT; NodeMCU label in brackets).
+pub mod pins {
+    /// Left servo signal (D1).
+    pub const LEFT_SERVO_GPIO: u8 = 5;
+    /// Right servo signal (D2).
+    pub const RIGHT_SERVO_GPIO: u8 = 4;
+    /// I2C data (D5).
+    pub const SDA_GPIO: u8 = 14;
+    /// I2C clock (D6).
+    pub const SCL_GPIO: u8 = 12;
+    /// Front lidar XSHUT (D3).
+    pub const FRONT_XSHUT_GPIO: u8 = 0;
+    /// Right lidar XSHUT (D4).
+    pub const RIGHT_XSHUT_GPIO: u8 = 2;
+    /// On-board LED (D0).
+    pub const LED_GPIO: u8 = 16;
+}
+
+/// I2C bus and addresses (7-bit).
+pub mod i2c {
+    /// Both VL53L0X boot at 0x29 (datasheet).
+    pub const LIDAR_DEFAULT_ADDR: u8 = 0x29;
+    /// Front lidar after bring-up (the course sketch used 22).
+    pub const FRONT_LIDAR_ADDR: u8 = 22;
+    /// Right lidar after bring-up (the course sketch used 25).
+    pub const RIGHT_LIDAR_ADDR: u8 = 25;
+    /// MPU9250 (AD0 low).
+    pub const MPU9250_ADDR: u8 = 0x68;
+    /// AK8963 once the MPU9250 is in bypass mode.
+    pub const AK8963_ADDR: u8 = 0x0C;
+    /// Bus clock, Hz (fast mode).
+    pub const FREQUENCY_HZ: u32 = 400_000;
+    /// Longest a slave may stretch the clock before the transfer fails, us.
+    pub const CLOCK_STRETCH_TIMEOUT_US: u32 = 1_000;
+}
+
+/// Timing of the control loop.
+pub mod timing {
+    /// Control loop rate, Hz.
+    pub const LOOP_HZ: u32 = 100;
+    /// Telemetry lines per second (0 = off).
+    pub const TELEMETRY_HZ: u32 = 10;
+    /// Stop when no command arrived for this long, ms.
+    pub const DEADMAN_MS: u32 = 500;
+    /// Wait before re-initialising a failed sensor, ms.
+    pub const SENSOR_RETRY_MS: u32 = 1_000;
+    /// A lidar reading older than this is stale, ms.
+    pub const LIDAR_STALE_MS: u32 = 200;
+}
+
+/// Serial port.
+pub mod serial {
+    /// UART0 baud rate (8N1).
+    pub const BAUD: u32 = 115_200;
+}
+
+/// The test arena: a box, origin at a corner, x along the long side (north),
+/// y along the short side (east), mm (PAPERBOT: the team's 762.5 x 495 mm box).
+pub mod arena {
+    use super::Length;
+    pub const LENGTH_X: Length = Length::from_mm_f64(762.5);
+    pub const WIDTH_Y: Length = Length::from_mm_f64(495.0);
+}

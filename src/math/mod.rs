@@ -1,0 +1,357 @@
+//! Fixed-point types and trigonometry. No knowledge of robots.
+//!
+//! The lx106 has no FPU, no hardware divide and no 32x32->64 high multiply,
+//! so every type here is an integer with a documented scale, and the hot
+//! paths use [`mul_hi`] (three 16x16 products) instead of a 64-bit multiply.
+//!
+//! | type | storage | one LSB | range |
+//! | --- | --- | --- | --- |
+//! | [`Angle`] | `u32` | 2^-32 turn (1.46e-9 rad) | one turn, wraps for free |
+//! | [`Length`] | `i32` | 2^-16 mm | +-32.7 m |
+//! | [`Coord`] | `i64` | 2^-32 mm | +-2.1e6 m (pose position) |
+//! | [`Speed`] | `i32` | 2^-32 mm/us (2.3e-7 m/s) | +-[`Speed::MAX`] |
+//! | [`TurnRate`] | `i32` | 2^-16 angle LSB/us (2.2e-8 rad/s) | +-[`TurnRate::MAX`] |
+//! | [`Dt`] | `u16` | 1 us | 0..65.535 ms |
+//! | sin/cos | `i32` | 2^-30 (Q2.30) | +-1 |
+//!
+//! Why not the `fixed` or `cordic` crates: the per-step path needs
+//! `mul_hi`-style products that never widen to `i64` (a `__muldi3` call of
+//! ~40 instructions on the lx106, which `fixed`'s generic multiply uses), and
+//! `fixed` crashes LLVM's Xtensa backend at opt-level 0. CORDIC needs one
+//! iteration per bit (16+ iterations for 1e-5); the 257-entry table with a
+//! second-order correction in [`sin_cos`] gives 2e-7 in five multiplies.
+//! The `*_f64` constructors are `const fn`s for the config module: they are
+//! evaluated by the compiler, so no float code reaches the robot.
+
+mod sin_table;
+mod trig;
+
+pub use trig::{atan2, sin_cos};
+
+/// High 32 bits of the signed 64-bit product `a * b`, i.e. `(a * b) >> 32`,
+/// from three 16x16 products (lx106: MULL/MUL16, no MULSH). The result is
+/// within 3 LSB of the exact floor (the dropped low partial products and
+/// carries); it never overflows.
+#[inline(always)]
+pub fn mul_hi(a: i32, b: i32) -> i32 {
+    let (ah, al) = (a >> 16, (a & 0xFFFF) as u32);
+    let (bh, bl) = (b >> 16, (b & 0xFFFF) as u32);
+    // |ah|, |bh| <= 2^15 and al, bl < 2^16: every product fits in i32, and
+    // the sum is at most 2^30 + 2 * 2^15 in magnitude.
+    let hh = ah.wrapping_mul(bh);
+    let hl = ah.wrapping_mul(bl as i32) >> 16;
+    let lh = (al as i32).wrapping_mul(bh) >> 16;
+    hh.wrapping_add(hl).wrapping_add(lh)
+}
+
+/// Rounds an `f64` to the nearest `i64` in a `const fn` (`f64::round` is not
+/// const on Rust 1.82).
+pub const fn round_f64(x: f64) -> i64 {
+    if x >= 0.0 {
+        (x + 0.5) as i64
+    } else {
+        (x - 0.5) as i64
+    }
+}
+
+/// `n / d` rounded to nearest (halves away from zero); `None` when `d == 0`.
+/// Off the per-step path only: lx106 has no divide instruction.
+pub fn div_round(n: i64, d: i64) -> Option<i64> {
+    if d == 0 {
+        return None;
+    }
+    let (n2, d2) = (n.saturating_mul(2), d.saturating_mul(2));
+    let q = if (n < 0) == (d < 0) { n2.saturating_add(d) } else { n2.saturating_sub(d) };
+    Some(q / d2)
+}
+
+/// Binary angle: `u32` where 2^32 is one full turn, so adding and
+/// subtracting wrap at 360 degrees for free and never lose precision.
+/// Headings use it clockwise from north (see the crate docs).
+#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug, Default, PartialOrd, Ord)]
+pub struct Angle(pub u32);
+
+impl Angle {
+    pub const ZERO: Angle = Angle(0);
+    pub const QUARTER_TURN: Angle = Angle(1 << 30);
+    pub const HALF_TURN: Angle = Angle(1 << 31);
+    /// Angle LSBs per millidegree: 2^32 / 360000.
+    const PER_MDEG_Q16: i64 = round_f64(4_294_967_296.0 / 360_000.0 * 65536.0);
+
+    /// From degrees (const: for the config module and host code).
+    pub const fn from_degrees_f64(deg: f64) -> Angle {
+        let turns = deg / 360.0;
+        let frac = turns - (turns as i64) as f64; // in (-1, 1)
+        Angle(round_f64(frac * 4_294_967_296.0) as u32)
+    }
+    /// From radians (const: for the config module and host code).
+    pub const fn from_radians_f64(rad: f64) -> Angle {
+        Angle::from_degrees_f64(rad * (180.0 / core::f64::consts::PI))
+    }
+    /// From integer millidegrees (any value; wraps).
+    pub fn from_millidegrees(mdeg: i32) -> Angle {
+        let bits = (i64::from(mdeg) * Self::PER_MDEG_Q16 + (1 << 15)) >> 16;
+        Angle(bits as u32)
+    }
+    /// Millidegrees in `0..360_000` (rounded).
+    pub fn to_millidegrees(self) -> u32 {
+        // 360000 / 2^32 in Q32 is 360000: the product fits in u64
+        ((u64::from(self.0) * 360_000 + (1 << 31)) >> 32) as u32 % 360_000
+    }
+    /// Signed millidegrees in `-180_000..180_000` (rounded).
+    pub fn to_signed_millidegrees(self) -> i32 {
+        ((i64::from(self.0 as i32) * 360_000 + (1 << 31)) >> 32) as i32
+    }
+    /// Radians in `[0, 2 pi)` (host code and tests).
+    pub fn to_radians_f64(self) -> f64 {
+        f64::from(self.0) * (core::f64::consts::TAU / 4_294_967_296.0)
+    }
+    /// Signed difference `self - other` in angle LSBs (`-2^31..2^31`).
+    pub fn diff(self, other: Angle) -> i32 {
+        self.0.wrapping_sub(other.0) as i32
+    }
+    pub fn wrapping_add(self, other: Angle) -> Angle {
+        Angle(self.0.wrapping_add(other.0))
+    }
+    pub fn wrapping_sub(self, other: Angle) -> Angle {
+        Angle(self.0.wrapping_sub(other.0))
+    }
+}
+
+/// A length or distance: `i32` in units of 2^-16 mm (range +-32.7 m).
+#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug, Default, PartialOrd, Ord)]
+pub struct Length(pub i32);
+
+impl Length {
+    pub const ZERO: Length = Length(0);
+    pub const MAX: Length = Length(i32::MAX);
+    pub const fn from_mm_f64(mm: f64) -> Length {
+        Length(round_f64(mm * 65536.0) as i32)
+    }
+    /// From whole millimetres (saturating).
+    pub const fn from_mm(mm: i32) -> Length {
+        Length(mm.saturating_mul(65536))
+    }
+    /// From micrometres (saturating).
+    pub fn from_um(um: i32) -> Length {
+        let bits = (i64::from(um) << 16) / 1000;
+        Length(bits.clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32)
+    }
+    /// Whole millimetres, rounded to nearest.
+    pub fn to_mm(self) -> i32 {
+        ((i64::from(self.0) + (1 << 15)) >> 16) as i32
+    }
+    /// Micrometres, rounded to nearest.
+    pub fn to_um(self) -> i32 {
+        ((i64::from(self.0) * 1000 + (1 << 15)) >> 16) as i32
+    }
+    pub fn to_mm_f64(self) -> f64 {
+        f64::from(self.0) / 65536.0
+    }
+    pub fn saturating_add(self, o: Length) -> Length {
+        Length(self.0.saturating_add(o.0))
+    }
+    pub fn saturating_sub(self, o: Length) -> Length {
+        Length(self.0.saturating_sub(o.0))
+    }
+}
+
+/// A pose coordinate: `i64` in units of 2^-32 mm. The state update adds
+/// steps of 2^-22 mm resolution to it, so no rounding error builds up over
+/// hours of updates.
+#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug, Default, PartialOrd, Ord)]
+pub struct Coord(pub i64);
+
+impl Coord {
+    pub const ZERO: Coord = Coord(0);
+    pub const fn from_mm_f64(mm: f64) -> Coord {
+        Coord(round_f64(mm * 4_294_967_296.0))
+    }
+    pub const fn from_length(l: Length) -> Coord {
+        Coord((l.0 as i64) << 16)
+    }
+    /// The coordinate as a [`Length`], rounded and saturated to +-32.7 m.
+    pub fn to_length(self) -> Length {
+        let bits = self.0.saturating_add(1 << 15) >> 16;
+        Length(bits.clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32)
+    }
+    pub fn to_mm_f64(self) -> f64 {
+        self.0 as f64 / 4_294_967_296.0
+    }
+    /// Adds a step in units of 2^-22 mm (what [`mul_hi`] of a Q24 length and
+    /// a Q30 sine gives).
+    #[inline(always)]
+    pub fn add_q22(self, step: i32) -> Coord {
+        Coord(self.0.saturating_add(i64::from(step) << 10))
+    }
+    pub fn saturating_add_length(self, l: Length) -> Coord {
+        Coord(self.0.saturating_add(i64::from(l.0) << 16))
+    }
+}
+
+/// Linear speed: `i32` in units of 2^-32 mm/us (2.3e-7 m/s), signed.
+/// Constructors clamp to +-[`Speed::MAX`], which keeps one step's distance
+/// (at most 65.5 ms) inside the state update's 32-bit products.
+#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug, Default, PartialOrd, Ord)]
+pub struct Speed(i32);
+
+impl Speed {
+    pub const ZERO: Speed = Speed(0);
+    /// 1 m/s (the paperbot does about 0.15).
+    pub const MAX: Speed = Speed(4_294_967);
+    /// Units of this type per mm/s: 2^32 / 1e6.
+    const PER_MM_S: f64 = 4_294_967_296.0 / 1_000_000.0;
+    const PER_MM_S_Q16: i64 = round_f64(Self::PER_MM_S * 65536.0);
+
+    pub const fn from_bits(bits: i32) -> Speed {
+        if bits > Self::MAX.0 {
+            Self::MAX
+        } else if bits < -Self::MAX.0 {
+            Speed(-Self::MAX.0)
+        } else {
+            Speed(bits)
+        }
+    }
+    pub const fn to_bits(self) -> i32 {
+        self.0
+    }
+    pub const fn from_mps_f64(mps: f64) -> Speed {
+        Speed::from_bits(round_f64(mps * 1000.0 * Self::PER_MM_S) as i32)
+    }
+    /// From mm/s in Q16 (clamped).
+    pub fn from_mm_s_q16(mm_s_q16: i32) -> Speed {
+        let bits = (i64::from(mm_s_q16) * Self::PER_MM_S_Q16) >> 32;
+        Speed::from_bits(bits.clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32)
+    }
+    /// From whole mm/s (clamped).
+    pub fn from_mm_s(mm_s: i32) -> Speed {
+        Speed::from_mm_s_q16(mm_s.saturating_mul(65536))
+    }
+    /// Speed in mm/s, rounded.
+    pub fn to_mm_s(self) -> i32 {
+        ((i64::from(self.0) * 1_000_000 + (1 << 31)) >> 32) as i32
+    }
+    pub fn to_mps_f64(self) -> f64 {
+        f64::from(self.0) / Self::PER_MM_S / 1000.0
+    }
+    pub fn abs(self) -> Speed {
+        Speed(self.0.saturating_abs())
+    }
+    pub fn neg(self) -> Speed {
+        Speed(-self.0) // |bits| <= MAX, so negation cannot overflow
+    }
+
+    /// Distance covered in `dt`, in units of 2^-24 mm (|result| < 2^29).
+    /// Two 16x16 products: `v = vh * 2^16 + vl`, `v dt / 2^8 = vh dt 2^8 + vl dt / 2^8`.
+    #[inline(always)]
+    pub fn distance_q24(self, dt: Dt) -> i32 {
+        let dt = u32::from(dt.0);
+        let vh = self.0 >> 16; // |vh| <= 66 (MAX >> 16)
+        let vl = (self.0 & 0xFFFF) as u32;
+        let hi = vh * (dt as i32); // |.| < 2^23
+        let lo = (vl * dt + (1 << 7)) >> 8; // vl*dt < 2^32 - 2^17
+        (hi << 8) + lo as i32
+    }
+}
+
+/// Turn rate: `i32` in units of 2^-16 [`Angle`] LSB per microsecond
+/// (2.2e-8 rad/s), positive clockwise. Clamped to +-[`TurnRate::MAX`].
+#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug, Default, PartialOrd, Ord)]
+pub struct TurnRate(i32);
+
+impl TurnRate {
+    pub const ZERO: TurnRate = TurnRate(0);
+    /// 20 rad/s (the paperbot turns at about 3).
+    pub const MAX: TurnRate = TurnRate(round_f64(20.0 * Self::PER_RAD_S) as i32);
+    /// Units of this type per rad/s: 2^32 / (2 pi) / 1e6 * 2^16.
+    const PER_RAD_S: f64 = 4_294_967_296.0 / core::f64::consts::TAU / 1_000_000.0 * 65536.0;
+    const PER_RAD_S_Q16: i64 = round_f64(Self::PER_RAD_S);
+
+    pub const fn from_bits(bits: i32) -> TurnRate {
+        if bits > Self::MAX.0 {
+            Self::MAX
+        } else if bits < -Self::MAX.0 {
+            TurnRate(-Self::MAX.0)
+        } else {
+            TurnRate(bits)
+        }
+    }
+    pub const fn to_bits(self) -> i32 {
+        self.0
+    }
+    pub const fn from_rad_s_f64(rad_s: f64) -> TurnRate {
+        TurnRate::from_bits(round_f64(rad_s * Self::PER_RAD_S) as i32)
+    }
+    /// From rad/s in Q16 (clamped).
+    pub fn from_rad_s_q16(rad_s_q16: i32) -> TurnRate {
+        let bits = (i64::from(rad_s_q16) * Self::PER_RAD_S_Q16) >> 16;
+        TurnRate::from_bits(bits.clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32)
+    }
+    /// From whole milliradians per second (clamped).
+    pub fn from_mrad_s(mrad_s: i32) -> TurnRate {
+        let bits = (i64::from(mrad_s) * Self::PER_RAD_S_Q16) / 1000;
+        TurnRate::from_bits(bits.clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32)
+    }
+    /// Milliradians per second, rounded.
+    pub fn to_mrad_s(self) -> i32 {
+        let n = i64::from(self.0) * 1000;
+        let half = Self::PER_RAD_S_Q16 / 2;
+        (if n >= 0 { (n + half) / Self::PER_RAD_S_Q16 } else { (n - half) / Self::PER_RAD_S_Q16 }) as i32
+    }
+    /// rad/s in Q16, rounded.
+    pub fn to_rad_s_q16(self) -> i32 {
+        let n = i64::from(self.0) << 16;
+        div_round(n, Self::PER_RAD_S_Q16).unwrap_or(0) as i32
+    }
+    pub fn to_rad_s_f64(self) -> f64 {
+        f64::from(self.0) / Self::PER_RAD_S
+    }
+    pub fn abs(self) -> TurnRate {
+        TurnRate(self.0.saturating_abs())
+    }
+    pub fn neg(self) -> TurnRate {
+        TurnRate(-self.0) // |bits| <= MAX
+    }
+
+    /// Rotation over `dt` as (whole angle LSBs, 2^-16 fraction). Exact:
+    /// `w = wh 2^16 + wl`, `w dt = wh dt 2^16 + wl dt`, and the angle is
+    /// modulo one turn, so the wrapping multiply is the right answer.
+    #[inline(always)]
+    pub fn rotation(self, dt: Dt) -> (Angle, u16) {
+        let dt = u32::from(dt.0);
+        let wh = (self.0 >> 16) as u32; // two's complement: wraps mod 2^32
+        let wl = (self.0 & 0xFFFF) as u32;
+        let lo = wl * dt; // < 2^32
+        (Angle(wh.wrapping_mul(dt).wrapping_add(lo >> 16)), lo as u16)
+    }
+}
+
+/// A time step for the state update: whole microseconds, at most 65.535 ms.
+#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug, Default, PartialOrd, Ord)]
+pub struct Dt(u16);
+
+/// A time step longer than [`Dt::MAX`].
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub struct DtTooLong;
+
+impl Dt {
+    pub const MAX: Dt = Dt(u16::MAX);
+    pub const fn from_micros(us: u32) -> Result<Dt, DtTooLong> {
+        if us > u16::MAX as u32 {
+            Err(DtTooLong)
+        } else {
+            Ok(Dt(us as u16))
+        }
+    }
+    /// Clamped to [`Dt::MAX`].
+    pub const fn from_micros_saturating(us: u32) -> Dt {
+        if us > u16::MAX as u32 {
+            Dt::MAX
+        } else {
+            Dt(us as u16)
+        }
+    }
+    pub const fn as_micros(self) -> u32 {
+        self.0 as u32
+    }
+}

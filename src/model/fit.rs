@@ -1,0 +1,200 @@
+//! Least-squares line fitting and readers for the lab's CSV formats
+//! (host only, feature `std`; floats are fine here: nothing in this module
+//! runs on the robot). `tests/data/lab1/README.md` describes the formats.
+
+use std::string::{String, ToString};
+use std::vec::Vec;
+
+/// `y = slope x + intercept` fitted by ordinary least squares.
+#[derive(Clone, Copy, PartialEq, Debug)]
+pub struct LineFit {
+    pub slope: f64,
+    pub intercept: f64,
+    /// Number of points.
+    pub n: usize,
+    /// Coefficient of determination.
+    pub r2: f64,
+}
+
+/// Ordinary least squares of y on x. `None` with fewer than two distinct x.
+pub fn fit_line<I: IntoIterator<Item = (f64, f64)>>(points: I) -> Option<LineFit> {
+    let pts: Vec<(f64, f64)> = points.into_iter().collect();
+    let n = pts.len();
+    if n < 2 {
+        return None;
+    }
+    let nf = n as f64;
+    let mx = pts.iter().map(|p| p.0).sum::<f64>() / nf;
+    let my = pts.iter().map(|p| p.1).sum::<f64>() / nf;
+    let sxx: f64 = pts.iter().map(|p| (p.0 - mx) * (p.0 - mx)).sum();
+    let sxy: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
+    let syy: f64 = pts.iter().map(|p| (p.1 - my) * (p.1 - my)).sum();
+    if sxx <= 0.0 {
+        return None;
+    }
+    let slope = sxy / sxx;
+    let intercept = my - slope * mx;
+    let r2 = if syy > 0.0 { (sxy * sxy) / (sxx * syy) } else { 1.0 };
+    Some(LineFit { slope, intercept, n, r2 })
+}
+
+/// A CSV problem, with its 1-based line number.
+#[derive(Clone, PartialEq, Debug)]
+pub struct CsvError {
+    pub line: usize,
+    pub message: String,
+}
+
+impl core::fmt::Display for CsvError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        write!(f, "line {}: {}", self.line, self.message)
+    }
+}
+
+/// Rows of a CSV with the given header (exact column names, in order).
+fn rows<'a>(text: &'a str, header: &[&str]) -> Result<Vec<(usize, Vec<&'a str>)>, CsvError> {
+    let mut lines = text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty());
+    let (_, head) = lines.next().ok_or(CsvError { line: 1, message: "empty file".to_string() })?;
+    let cols: Vec<&str> = head.split(',').map(str::trim).collect();
+    if cols != header {
+        return Err(CsvError {
+            line: 1,
+            message: std::format!("expected header {:?}, found {:?}", header.join(","), head),
+        });
+    }
+    lines
+        .map(|(i, l)| {
+            let f: Vec<&str> = l.split(',').map(str::trim).collect();
+            if f.len() != header.len() {
+                Err(CsvError {
+                    line: i + 1,
+                    message: std::format!("expected {} fields, found {}", header.len(), f.len()),
+                })
+            } else {
+                Ok((i + 1, f))
+            }
+        })
+        .collect()
+}
+
+fn num(line: usize, s: &str) -> Result<f64, CsvError> {
+    s.parse::<f64>().map_err(|_| CsvError { line, message: std::format!("not a number: {s:?}") })
+}
+
+/// Header of `servo_runs.csv`.
+pub const SERVO_RUNS_HEADER: [&str; 6] = ["motion", "left_cmd", "right_cmd", "trial", "seconds", "what_was_timed"];
+/// Header of `lidar_front.csv` / `lidar_right.csv`.
+pub const LIDAR_HEADER: [&str; 2] = ["actual_mm", "reading_mm"];
+/// Header of `magnetometer_heading.csv`.
+pub const MAGNETOMETER_HEADER: [&str; 2] = ["compass_deg", "reading_deg"];
+
+/// One timed trial of `servo_runs.csv`.
+#[derive(Clone, PartialEq, Debug)]
+pub struct ServoRun {
+    pub motion: String,
+    pub left_cmd: f64,
+    pub right_cmd: f64,
+    pub seconds: f64,
+}
+
+pub fn parse_servo_runs(text: &str) -> Result<Vec<ServoRun>, CsvError> {
+    rows(text, &SERVO_RUNS_HEADER)?
+        .into_iter()
+        .map(|(line, f)| {
+            let motion = f[0].to_string();
+            if !["forward", "backward", "cw", "ccw"].contains(&motion.as_str()) {
+                return Err(CsvError { line, message: std::format!("unknown motion {motion:?}") });
+            }
+            Ok(ServoRun { motion, left_cmd: num(line, f[1])?, right_cmd: num(line, f[2])?, seconds: num(line, f[4])? })
+        })
+        .collect()
+}
+
+/// Straight runs timed over this distance, m (`servo_runs.csv`).
+pub const STRAIGHT_DISTANCE_M: f64 = 0.45;
+/// Turn runs timed over this many full turns (`servo_runs.csv`).
+pub const TURNS_TIMED: f64 = 5.0;
+
+/// The lines of one motion, fitted the way the lab README describes: speed
+/// per command pair from the mean time, wheel speed = car speed / r for
+/// straight motions, the car's turn rate for turns; one line per wheel of
+/// speed against that wheel's command.
+#[derive(Clone, Copy, PartialEq, Debug)]
+pub struct MotionFit {
+    pub left: LineFit,
+    pub right: LineFit,
+    pub left_range: (f64, f64),
+    pub right_range: (f64, f64),
+}
+
+pub fn fit_motion(runs: &[ServoRun], motion: &str, wheel_radius_m: f64) -> Option<MotionFit> {
+    let mut pairs: Vec<(f64, f64, Vec<f64>)> = Vec::new();
+    for r in runs.iter().filter(|r| r.motion == motion) {
+        match pairs.iter_mut().find(|p| p.0 == r.left_cmd && p.1 == r.right_cmd) {
+            Some(p) => p.2.push(r.seconds),
+            None => pairs.push((r.left_cmd, r.right_cmd, std::vec![r.seconds])),
+        }
+    }
+    let straight = motion == "forward" || motion == "backward";
+    let speeds: Vec<(f64, f64, f64)> = pairs
+        .iter()
+        .map(|(l, r, t)| {
+            let mean = t.iter().sum::<f64>() / t.len() as f64;
+            let y = if straight {
+                STRAIGHT_DISTANCE_M / mean / wheel_radius_m
+            } else {
+                TURNS_TIMED * core::f64::consts::TAU / mean
+            };
+            (*l, *r, y)
+        })
+        .collect();
+    let range = |v: Vec<f64>| {
+        (v.iter().cloned().fold(f64::INFINITY, f64::min), v.iter().cloned().fold(f64::NEG_INFINITY, f64::max))
+    };
+    Some(MotionFit {
+        left: fit_line(speeds.iter().map(|s| (s.0, s.2)))?,
+        right: fit_line(speeds.iter().map(|s| (s.1, s.2)))?,
+        left_range: range(speeds.iter().map(|s| s.0).collect()),
+        right_range: range(speeds.iter().map(|s| s.1).collect()),
+    })
+}
+
+/// `(actual_mm, reading_mm)` rows of a lidar CSV.
+pub fn parse_lidar(text: &str) -> Result<Vec<(f64, f64)>, CsvError> {
+    rows(text, &LIDAR_HEADER)?.into_iter().map(|(line, f)| Ok((num(line, f[0])?, num(line, f[1])?))).collect()
+}
+
+/// The lidar model in the data's direction: distance (actual) on reading.
+/// `per_distance_means` fits the mean reading at each distance (the lab
+/// README's method); otherwise every reading is a point (the report's).
+pub fn fit_lidar(rows: &[(f64, f64)], per_distance_means: bool) -> Option<LineFit> {
+    if !per_distance_means {
+        return fit_line(rows.iter().map(|&(a, r)| (r, a)));
+    }
+    let mut groups: Vec<(f64, f64, usize)> = Vec::new();
+    for &(a, r) in rows {
+        match groups.iter_mut().find(|g| g.0 == a) {
+            Some(g) => {
+                g.1 += r;
+                g.2 += 1;
+            }
+            None => groups.push((a, r, 1)),
+        }
+    }
+    fit_line(groups.iter().map(|g| (g.1 / g.2 as f64, g.0)))
+}
+
+/// `(compass_deg, reading_deg)` rows of `magnetometer_heading.csv`.
+pub fn parse_magnetometer(text: &str) -> Result<Vec<(f64, f64)>, CsvError> {
+    rows(text, &MAGNETOMETER_HEADER)?.into_iter().map(|(line, f)| Ok((num(line, f[0])?, num(line, f[1])?))).collect()
+}
+
+/// Signed difference `a - b` of two headings in degrees, in (-180, 180].
+pub fn heading_error_deg(a: f64, b: f64) -> f64 {
+    let d = (a - b).rem_euclid(360.0);
+    if d > 180.0 {
+        d - 360.0
+    } else {
+        d
+    }
+}

@@ -1,0 +1,74 @@
+//! The lidar sensor model (report section 3.3), in the direction the data
+//! was fitted: `distance = slope * reading + intercept`, where `reading` is
+//! the VL53L0X's output in mm and `distance` is from the car's reference
+//! point (the report's text has it the other way round; its data does not).
+
+use crate::math::{round_f64, Length};
+
+/// One lidar's fitted line and its valid reading window.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub struct LidarModel {
+    /// Slope in Q16 (dimensionless, mm per mm).
+    pub slope_q16: i32,
+    /// Intercept in mm.
+    pub intercept: Length,
+    /// Readings below this (mm) are inside the car: reported as too close.
+    pub min_reading_mm: u16,
+    /// Readings above this (mm) are beyond reliable range: no target.
+    pub max_reading_mm: u16,
+}
+
+/// What one lidar reading means.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub enum Range {
+    /// Distance from the car's reference point to the target.
+    Target(Length),
+    /// Nothing in range (8190/8191 from the chip, or past the valid window).
+    NoTarget,
+    /// Closer than the model holds for (below the valid window).
+    TooClose,
+}
+
+impl Range {
+    pub fn distance(self) -> Option<Length> {
+        match self {
+            Range::Target(d) => Some(d),
+            _ => None,
+        }
+    }
+}
+
+/// VL53L0X readings at or above this mean "no target" (8190 and 8191).
+pub const NO_TARGET_READING: u16 = 8190;
+
+impl LidarModel {
+    pub const fn new(slope: f64, intercept_mm: f64, min_reading_mm: u16, max_reading_mm: u16) -> LidarModel {
+        LidarModel {
+            slope_q16: round_f64(slope * 65536.0) as i32,
+            intercept: Length::from_mm_f64(intercept_mm),
+            min_reading_mm,
+            max_reading_mm,
+        }
+    }
+
+    /// Applies the model to a raw reading (mm). One 32-bit multiply.
+    pub fn range(&self, reading_mm: u16) -> Range {
+        if reading_mm >= NO_TARGET_READING || reading_mm > self.max_reading_mm {
+            return Range::NoTarget;
+        }
+        if reading_mm < self.min_reading_mm {
+            return Range::TooClose;
+        }
+        // |slope_q16| < 2^17 and reading < 2^13: the product fits in i32.
+        let d = i64::from(self.slope_q16) * i64::from(reading_mm) + i64::from(self.intercept.0);
+        Range::Target(Length(d.clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32))
+    }
+
+    /// The raw reading (mm, rounded) that the model maps to `distance`:
+    /// what a simulated chip reports for a true distance.
+    pub fn reading_for(&self, distance: Length) -> Option<u16> {
+        let num = i64::from(distance.0) - i64::from(self.intercept.0);
+        let r = crate::math::div_round(num, i64::from(self.slope_q16))?;
+        u16::try_from(r.max(0)).ok()
+    }
+}

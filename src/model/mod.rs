@@ -1,0 +1,13 @@
+//! Pure models from the lab report: actuator lines (both directions), lidar
+//! lines, the compass, and the state update. No I/O.
+
+pub mod actuator;
+pub mod compass;
+#[cfg(feature = "std")]
+pub mod fit;
+pub mod lidar;
+pub mod state;
+
+pub use actuator::{ActuatorModel, Drive, Motion, MotionKind, ServoCmd, Trim};
+pub use lidar::{LidarModel, Range};
+pub use state::{step, Pose};
