@@ -14,5 +14,10 @@
 extern crate std;
 
 pub mod config;
+pub mod control;
+pub mod driver;
 pub mod math;
 pub mod model;
+#[cfg(feature = "sim")]
+pub mod sim;
+pub mod board;
