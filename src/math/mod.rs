@@ -19,7 +19,7 @@
 //! ~40 instructions on the lx106, which `fixed`'s generic multiply uses), and
 //! `fixed` crashes LLVM's Xtensa backend at opt-level 0. CORDIC needs one
 //! iteration per bit (16+ iterations for 1e-5); the 257-entry table with a
-//! second-order correction in [`sin_cos`] gives 2e-7 in five multiplies.
+//! second-order correction in [`sin_cos`] gives 1.2e-7 in five multiplies.
 //! The `*_f64` constructors are `const fn`s for the config module: they are
 //! evaluated by the compiler, so no float code reaches the robot.
 
@@ -54,6 +54,17 @@ pub const fn round_f64(x: f64) -> i64 {
     }
 }
 
+/// Saturating `i64 -> i32` (const).
+pub const fn sat_i32(x: i64) -> i32 {
+    if x > i32::MAX as i64 {
+        i32::MAX
+    } else if x < i32::MIN as i64 {
+        i32::MIN
+    } else {
+        x as i32
+    }
+}
+
 /// `n / d` rounded to nearest (halves away from zero); `None` when `d == 0`.
 /// Off the per-step path only: lx106 has no divide instruction.
 pub fn div_round(n: i64, d: i64) -> Option<i64> {
@@ -75,8 +86,6 @@ impl Angle {
     pub const ZERO: Angle = Angle(0);
     pub const QUARTER_TURN: Angle = Angle(1 << 30);
     pub const HALF_TURN: Angle = Angle(1 << 31);
-    /// Angle LSBs per millidegree: 2^32 / 360000.
-    const PER_MDEG_Q16: i64 = round_f64(4_294_967_296.0 / 360_000.0 * 65536.0);
 
     /// From degrees (const: for the config module and host code).
     pub const fn from_degrees_f64(deg: f64) -> Angle {
@@ -89,9 +98,11 @@ impl Angle {
         Angle::from_degrees_f64(rad * (180.0 / core::f64::consts::PI))
     }
     /// From integer millidegrees (any value; wraps).
+    /// Exact to the nearest LSB: `2^32 / 360000 = 2^26 / 5625`. Not on the
+    /// per-step path (one division).
     pub fn from_millidegrees(mdeg: i32) -> Angle {
-        let bits = (i64::from(mdeg) * Self::PER_MDEG_Q16 + (1 << 15)) >> 16;
-        Angle(bits as u32)
+        let m = i64::from(mdeg.rem_euclid(360_000)); // 0..360000
+        Angle(div_round(m << 26, 5625).unwrap_or(0) as u32)
     }
     /// Millidegrees in `0..360_000` (rounded).
     pub fn to_millidegrees(self) -> u32 {
@@ -126,7 +137,7 @@ impl Length {
     pub const ZERO: Length = Length(0);
     pub const MAX: Length = Length(i32::MAX);
     pub const fn from_mm_f64(mm: f64) -> Length {
-        Length(round_f64(mm * 65536.0) as i32)
+        Length(sat_i32(round_f64(mm * 65536.0)))
     }
     /// From whole millimetres (saturating).
     pub const fn from_mm(mm: i32) -> Length {
@@ -135,7 +146,7 @@ impl Length {
     /// From micrometres (saturating).
     pub fn from_um(um: i32) -> Length {
         let bits = (i64::from(um) << 16) / 1000;
-        Length(bits.clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32)
+        Length(sat_i32(bits))
     }
     /// Whole millimetres, rounded to nearest.
     pub fn to_mm(self) -> i32 {
@@ -173,7 +184,7 @@ impl Coord {
     /// The coordinate as a [`Length`], rounded and saturated to +-32.7 m.
     pub fn to_length(self) -> Length {
         let bits = self.0.saturating_add(1 << 15) >> 16;
-        Length(bits.clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32)
+        Length(sat_i32(bits))
     }
     pub fn to_mm_f64(self) -> f64 {
         self.0 as f64 / 4_294_967_296.0
@@ -216,12 +227,12 @@ impl Speed {
         self.0
     }
     pub const fn from_mps_f64(mps: f64) -> Speed {
-        Speed::from_bits(round_f64(mps * 1000.0 * Self::PER_MM_S) as i32)
+        Speed::from_bits(sat_i32(round_f64(mps * 1000.0 * Self::PER_MM_S)))
     }
     /// From mm/s in Q16 (clamped).
     pub fn from_mm_s_q16(mm_s_q16: i32) -> Speed {
         let bits = (i64::from(mm_s_q16) * Self::PER_MM_S_Q16) >> 32;
-        Speed::from_bits(bits.clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32)
+        Speed::from_bits(sat_i32(bits))
     }
     /// From whole mm/s (clamped).
     pub fn from_mm_s(mm_s: i32) -> Speed {
@@ -237,6 +248,7 @@ impl Speed {
     pub fn abs(self) -> Speed {
         Speed(self.0.saturating_abs())
     }
+    #[allow(clippy::should_implement_trait)] // also implemented: `-speed`
     pub fn neg(self) -> Speed {
         Speed(-self.0) // |bits| <= MAX, so negation cannot overflow
     }
@@ -251,6 +263,13 @@ impl Speed {
         let hi = vh * (dt as i32); // |.| < 2^23
         let lo = (vl * dt + (1 << 7)) >> 8; // vl*dt < 2^32 - 2^17
         (hi << 8) + lo as i32
+    }
+}
+
+impl core::ops::Neg for Speed {
+    type Output = Speed;
+    fn neg(self) -> Speed {
+        Speed::neg(self)
     }
 }
 
@@ -280,17 +299,17 @@ impl TurnRate {
         self.0
     }
     pub const fn from_rad_s_f64(rad_s: f64) -> TurnRate {
-        TurnRate::from_bits(round_f64(rad_s * Self::PER_RAD_S) as i32)
+        TurnRate::from_bits(sat_i32(round_f64(rad_s * Self::PER_RAD_S)))
     }
     /// From rad/s in Q16 (clamped).
     pub fn from_rad_s_q16(rad_s_q16: i32) -> TurnRate {
         let bits = (i64::from(rad_s_q16) * Self::PER_RAD_S_Q16) >> 16;
-        TurnRate::from_bits(bits.clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32)
+        TurnRate::from_bits(sat_i32(bits))
     }
     /// From whole milliradians per second (clamped).
     pub fn from_mrad_s(mrad_s: i32) -> TurnRate {
         let bits = (i64::from(mrad_s) * Self::PER_RAD_S_Q16) / 1000;
-        TurnRate::from_bits(bits.clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32)
+        TurnRate::from_bits(sat_i32(bits))
     }
     /// Milliradians per second, rounded.
     pub fn to_mrad_s(self) -> i32 {
@@ -309,6 +328,7 @@ impl TurnRate {
     pub fn abs(self) -> TurnRate {
         TurnRate(self.0.saturating_abs())
     }
+    #[allow(clippy::should_implement_trait)] // also implemented: `-rate`
     pub fn neg(self) -> TurnRate {
         TurnRate(-self.0) // |bits| <= MAX
     }
@@ -323,6 +343,13 @@ impl TurnRate {
         let wl = (self.0 & 0xFFFF) as u32;
         let lo = wl * dt; // < 2^32
         (Angle(wh.wrapping_mul(dt).wrapping_add(lo >> 16)), lo as u16)
+    }
+}
+
+impl core::ops::Neg for TurnRate {
+    type Output = TurnRate;
+    fn neg(self) -> TurnRate {
+        TurnRate::neg(self)
     }
 }
 

@@ -12,7 +12,7 @@
 //!   (it is mounted mirrored): forward is left > 90, right < 90 (the data's
 //!   forward-right line `y = -0.146 x + 15.85` falls as the command rises).
 
-use crate::math::{div_round, round_f64, Length, Speed, TurnRate};
+use crate::math::{div_round, round_f64, sat_i32, Length, Speed, TurnRate};
 
 /// A servo command in the Arduino `Servo.write()` scale (0..=180, 90 = stop),
 /// with 8 fractional bits, so the inverse model is not rounded to whole steps.
@@ -45,7 +45,7 @@ impl ServoCmd {
         }
     }
     pub const fn from_f64(cmd: f64) -> ServoCmd {
-        ServoCmd::from_q8_signed(round_f64(cmd * 256.0) as i32)
+        ServoCmd::from_q8_signed(sat_i32(round_f64(cmd * 256.0)))
     }
     pub const fn to_q8(self) -> u16 {
         self.0
@@ -75,7 +75,7 @@ pub struct Trim(pub i16);
 impl Trim {
     pub const ZERO: Trim = Trim(0);
     pub const fn from_f64(steps: f64) -> Trim {
-        Trim(round_f64(steps * 256.0) as i16)
+        Trim(sat_i32(round_f64(steps * 256.0)) as i16)
     }
 }
 
@@ -89,7 +89,7 @@ pub struct Line {
 impl Line {
     /// From the report's numbers (y in rad/s, x in commands).
     pub const fn from_f64(slope: f64, intercept: f64) -> Line {
-        Line { slope_q16: round_f64(slope * 65536.0) as i32, intercept_q16: round_f64(intercept * 65536.0) as i32 }
+        Line { slope_q16: sat_i32(round_f64(slope * 65536.0)), intercept_q16: sat_i32(round_f64(intercept * 65536.0)) }
     }
     /// `y` in rad/s Q16 at `cmd`. 32-bit: |slope| < 2^15 (0.5 rad/s per
     /// step), cmd < 2^16.

@@ -2,7 +2,7 @@
 //! adjustment (ASA), hard- and soft-iron correction, axis orientation and
 //! declination, giving the heading clockwise from north. Integer only.
 
-use crate::math::{atan2, round_f64, Angle};
+use crate::math::{atan2, round_f64, sat_i32, Angle};
 
 /// Raw AK8963 counts, in the chip's own axes.
 #[derive(Clone, Copy, PartialEq, Eq, Debug, Default)]
@@ -86,11 +86,11 @@ impl MagCalibration {
     pub const IDENTITY: MagCalibration = MagCalibration { bias: [0; 3], scale_q16: [65536; 3] };
     pub const fn from_f64(bias: [f64; 3], scale: [f64; 3]) -> MagCalibration {
         MagCalibration {
-            bias: [round_f64(bias[0]) as i32, round_f64(bias[1]) as i32, round_f64(bias[2]) as i32],
+            bias: [sat_i32(round_f64(bias[0])), sat_i32(round_f64(bias[1])), sat_i32(round_f64(bias[2]))],
             scale_q16: [
-                round_f64(scale[0] * 65536.0) as i32,
-                round_f64(scale[1] * 65536.0) as i32,
-                round_f64(scale[2] * 65536.0) as i32,
+                sat_i32(round_f64(scale[0] * 65536.0)),
+                sat_i32(round_f64(scale[1] * 65536.0)),
+                sat_i32(round_f64(scale[2] * 65536.0)),
             ],
         }
     }

@@ -198,3 +198,57 @@ pub fn heading_error_deg(a: f64, b: f64) -> f64 {
         d
     }
 }
+
+/// Fits a lab CSV (recognised by its header) and renders the result as
+/// constants ready to paste into `src/config.rs`. `path` names the lidar
+/// (front/right); `all` fits every lidar reading instead of per-distance means.
+pub fn config_constants(text: &str, path: &str, all: bool) -> Result<String, String> {
+    let header = text.lines().next().unwrap_or("").trim();
+    if header == SERVO_RUNS_HEADER.join(",") {
+        servo_constants(text)
+    } else if header == LIDAR_HEADER.join(",") {
+        lidar_constants(text, path, all)
+    } else {
+        Err(std::format!("unrecognised header {header:?} (servo_runs or lidar CSV expected)"))
+    }
+}
+
+fn servo_constants(text: &str) -> Result<String, String> {
+    let runs = parse_servo_runs(text).map_err(|e| e.to_string())?;
+    let r = crate::config::geometry::WHEEL_RADIUS.to_mm_f64() / 1000.0;
+    let mut s = std::format!("// actuator lines fitted from {} trials (wheel radius {r} m)\n", runs.len());
+    for (motion, name) in [("forward", "FORWARD"), ("backward", "BACKWARD"), ("cw", "CW"), ("ccw", "CCW")] {
+        let Some(f) = fit_motion(&runs, motion, r) else {
+            s += &std::format!("// {motion}: not enough distinct command pairs\n");
+            continue;
+        };
+        let wheel = |l: &LineFit, (lo, hi): (f64, f64)| {
+            std::format!("WheelLine::new({:.4}, {:.4}, {}, {})", l.slope, l.intercept, lo as u8, hi as u8)
+        };
+        s += &std::format!(
+            "// {motion}: R^2 left {:.3}, right {:.3}\npub const {name}: MotionLines =\n    MotionLines {{ left: {}, right: {} }};\n",
+            f.left.r2,
+            f.right.r2,
+            wheel(&f.left, f.left_range),
+            wheel(&f.right, f.right_range)
+        );
+    }
+    Ok(s)
+}
+
+fn lidar_constants(text: &str, path: &str, all: bool) -> Result<String, String> {
+    let rows = parse_lidar(text).map_err(|e| e.to_string())?;
+    let f = fit_lidar(&rows, !all).ok_or("not enough distinct distances")?;
+    let name = if path.contains("right") { "RIGHT" } else { "FRONT" };
+    Ok(std::format!(
+        "// distance = {:.4} * reading {:+.4} mm, {} readings ({}), R^2 {:.5}\n\
+         pub const {name}: LidarModel = LidarModel::new({:.4}, {:.4}, MIN_READING_MM, MAX_READING_MM);\n",
+        f.slope,
+        f.intercept,
+        rows.len(),
+        if all { "every reading" } else { "per-distance means" },
+        f.r2,
+        f.slope,
+        f.intercept
+    ))
+}

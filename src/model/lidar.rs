@@ -3,7 +3,7 @@
 //! the VL53L0X's output in mm and `distance` is from the car's reference
 //! point (the report's text has it the other way round; its data does not).
 
-use crate::math::{round_f64, Length};
+use crate::math::{round_f64, sat_i32, Length};
 
 /// One lidar's fitted line and its valid reading window.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
@@ -44,7 +44,7 @@ pub const NO_TARGET_READING: u16 = 8190;
 impl LidarModel {
     pub const fn new(slope: f64, intercept_mm: f64, min_reading_mm: u16, max_reading_mm: u16) -> LidarModel {
         LidarModel {
-            slope_q16: round_f64(slope * 65536.0) as i32,
+            slope_q16: sat_i32(round_f64(slope * 65536.0)),
             intercept: Length::from_mm_f64(intercept_mm),
             min_reading_mm,
             max_reading_mm,
@@ -59,9 +59,10 @@ impl LidarModel {
         if reading_mm < self.min_reading_mm {
             return Range::TooClose;
         }
-        // |slope_q16| < 2^17 and reading < 2^13: the product fits in i32.
-        let d = i64::from(self.slope_q16) * i64::from(reading_mm) + i64::from(self.intercept.0);
-        Range::Target(Length(d.clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32))
+        // reading < 8190 < 2^13, so the product fits in i32 for any slope
+        // below 2^17 (2.0); the saturation only guards a nonsense config.
+        let d = self.slope_q16.saturating_mul(i32::from(reading_mm)).saturating_add(self.intercept.0);
+        Range::Target(Length(d))
     }
 
     /// The raw reading (mm, rounded) that the model maps to `distance`:
