@@ -1,0 +1,476 @@
+//! Commands: the grammar (see the module docs of [`super`]), the parser and
+//! the canonical form that `ok` responses echo.
+
+use heapless::String;
+
+use super::number::{parse_fixed, push_fixed, push_str, push_u32, NumError};
+use super::{Overflow, MAX_LINE};
+use crate::config::{compass, serial};
+use crate::math::{Angle, Speed, TurnRate};
+use crate::model::{Motion, ServoCmd, Trim};
+
+/// Which servo a `trim` command adjusts.
+#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
+pub enum Side {
+    Left,
+    Right,
+}
+
+/// One parsed command line.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub enum Command {
+    /// `fwd`/`back` (speed in m/s) or `cw`/`ccw` (turn rate in rad/s),
+    /// for `duration_ms` or, without one, until the next command or the
+    /// deadman. `motion` is never [`Motion::Stop`] and never zero.
+    Drive { motion: Motion, duration_ms: Option<u32> },
+    /// Both servos to neutral (90 plus trim).
+    Stop,
+    /// Raw servo commands (0..180, 90 = stop, trims not applied).
+    Servo { left: ServoCmd, right: ServoCmd, duration_ms: Option<u32> },
+    /// Sets one servo's trim (in command steps, moves its neutral).
+    Trim { side: Side, trim: Trim },
+    /// Sets the pose estimate (`reset` is `pose 0 0 0`).
+    SetPose { x_mm: i32, y_mm: i32, heading: Angle },
+    /// Starts a magnetometer calibration sweep of `samples` samples.
+    Calibrate { samples: u16 },
+    /// Telemetry rows per second, 0 = off.
+    Rate { hz: u16 },
+    Status,
+    Help,
+}
+
+/// A command argument: its name, unit, resolution and accepted range, for
+/// the parser and for error messages.
+#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
+pub enum Field {
+    /// `fwd`/`back` speed, m/s.
+    Speed,
+    /// `cw`/`ccw` turn rate, rad/s.
+    TurnRate,
+    /// Optional duration of a motion, s.
+    Duration,
+    /// `servo` left command.
+    LeftCommand,
+    /// `servo` right command.
+    RightCommand,
+    /// `trim` side: `left`/`l` or `right`/`r`.
+    Side,
+    /// `trim` amount, command steps.
+    Trim,
+    /// `pose` x, mm.
+    X,
+    /// `pose` y, mm.
+    Y,
+    /// `pose` heading, degrees clockwise from north.
+    Heading,
+    /// `cal` sample count.
+    Samples,
+    /// `rate`, Hz.
+    Rate,
+}
+
+impl Field {
+    /// The name used in messages.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Field::Speed => "speed",
+            Field::TurnRate => "turn rate",
+            Field::Duration => "duration",
+            Field::LeftCommand => "left command",
+            Field::RightCommand => "right command",
+            Field::Side => "side",
+            Field::Trim => "trim",
+            Field::X => "x",
+            Field::Y => "y",
+            Field::Heading => "heading",
+            Field::Samples => "samples",
+            Field::Rate => "rate",
+        }
+    }
+    /// The unit the user writes (empty for plain counts).
+    pub const fn unit(self) -> &'static str {
+        match self {
+            Field::Speed => "m/s",
+            Field::TurnRate => "rad/s",
+            Field::Duration => "s",
+            Field::LeftCommand | Field::RightCommand | Field::Side | Field::Samples => "",
+            Field::Trim => "steps",
+            Field::X | Field::Y => "mm",
+            Field::Heading => "deg",
+            Field::Rate => "Hz",
+        }
+    }
+    /// Decimal places accepted (the value's resolution).
+    pub const fn decimals(self) -> u32 {
+        match self {
+            Field::Speed | Field::TurnRate | Field::Duration | Field::Heading => 3,
+            Field::LeftCommand | Field::RightCommand | Field::Trim => 2,
+            Field::Side | Field::X | Field::Y | Field::Samples | Field::Rate => 0,
+        }
+    }
+    /// Accepted range, inclusive, in units of `10^-decimals` (speed in mm/s,
+    /// turn rate in mrad/s, duration in ms, commands and trim in 1/100 step,
+    /// heading in millidegrees). `None` for [`Field::Side`] (not a number).
+    pub const fn range(self) -> Option<(i32, i32)> {
+        // every limit is a small config constant (<= 360_000): the casts are exact
+        Some(match self {
+            Field::Speed => (1, serial::MAX_SPEED_MM_S as i32),
+            Field::TurnRate => (1, serial::MAX_TURN_MRAD_S as i32),
+            Field::Duration => (1, serial::MAX_DURATION_MS as i32),
+            Field::LeftCommand | Field::RightCommand => (0, 18_000),
+            Field::Trim => (-(serial::MAX_TRIM_CENTI as i32), serial::MAX_TRIM_CENTI as i32),
+            Field::X | Field::Y => (-(serial::MAX_POSE_MM as i32), serial::MAX_POSE_MM as i32),
+            Field::Heading => (-360_000, 360_000),
+            Field::Samples => (serial::MIN_CAL_SAMPLES as i32, serial::MAX_CAL_SAMPLES as i32),
+            Field::Rate => (0, serial::MAX_TELEMETRY_HZ as i32),
+            Field::Side => return None,
+        })
+    }
+}
+
+const _: () = {
+    assert!(serial::MAX_SPEED_MM_S >= 1 && serial::MAX_SPEED_MM_S <= 1_000); // Speed::MAX is 1 m/s
+    assert!(serial::MAX_TURN_MRAD_S >= 1 && serial::MAX_TURN_MRAD_S <= 20_000); // TurnRate::MAX is 20 rad/s
+    assert!(serial::MAX_DURATION_MS >= 1 && serial::MAX_DURATION_MS <= 3_600_000);
+    assert!(serial::MAX_TRIM_CENTI <= 12_700); // Trim is i16 in 1/256 steps
+    assert!(serial::MAX_POSE_MM <= 32_000); // Length holds +-32767 mm
+    assert!(serial::MIN_CAL_SAMPLES <= compass::CALIBRATION_SAMPLES);
+    assert!(compass::CALIBRATION_SAMPLES <= serial::MAX_CAL_SAMPLES);
+    assert!(serial::MAX_LINE >= 32 && serial::MAX_LINE <= 255);
+};
+
+/// Why a line was refused. Each renders as one line (see
+/// [`super::format_response`]); a refused line changes nothing.
+#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
+pub enum ParseError {
+    /// Nothing but whitespace (the loop may ignore it silently).
+    Empty,
+    /// Longer than [`MAX_LINE`] bytes.
+    TooLong,
+    /// A byte that is not printable ASCII (space and tab allowed).
+    NotAscii,
+    /// The first word is no command.
+    UnknownCommand,
+    /// A required argument is missing.
+    MissingArgument(Field),
+    /// An argument is not a number of the field's resolution.
+    BadNumber(Field),
+    /// A number outside the field's range.
+    OutOfRange(Field),
+    /// A word argument is not one of its choices (the trim side).
+    BadChoice(Field),
+    /// More arguments than the command takes.
+    TrailingInput,
+}
+
+impl ParseError {
+    /// Writes the message (without the `# err ` prefix), e.g.
+    /// `speed out of range 0.001..0.300 m/s`.
+    pub fn write<const N: usize>(&self, out: &mut String<N>) -> Result<(), Overflow> {
+        match *self {
+            ParseError::Empty => push_str(out, "empty line"),
+            ParseError::TooLong => {
+                push_str(out, "line too long, max ")?;
+                push_u32(out, MAX_LINE as u32)?; // MAX_LINE <= 255 (asserted)
+                push_str(out, " bytes")
+            }
+            ParseError::NotAscii => push_str(out, "line has a byte that is not printable ASCII"),
+            ParseError::UnknownCommand => push_str(out, "unknown command, try help"),
+            ParseError::MissingArgument(f) => {
+                push_str(out, "missing ")?;
+                push_str(out, f.name())?;
+                push_str(out, ", want ")?;
+                write_want(out, f)
+            }
+            ParseError::BadNumber(f) => {
+                push_str(out, "bad ")?;
+                push_str(out, f.name())?;
+                push_str(out, ", want ")?;
+                write_want(out, f)
+            }
+            ParseError::OutOfRange(f) => {
+                push_str(out, f.name())?;
+                push_str(out, " out of range ")?;
+                write_range(out, f)
+            }
+            ParseError::BadChoice(f) => {
+                push_str(out, "bad ")?;
+                push_str(out, f.name())?;
+                push_str(out, ", want ")?;
+                write_want(out, f)
+            }
+            ParseError::TrailingInput => push_str(out, "unexpected input after the arguments"),
+        }
+    }
+}
+
+/// "a number 0.001..0.300 m/s with up to 3 decimals", "an integer 0..100 Hz",
+/// "left or right".
+fn write_want<const N: usize>(out: &mut String<N>, f: Field) -> Result<(), Overflow> {
+    if f.range().is_none() {
+        return push_str(out, "left or right");
+    }
+    push_str(out, if f.decimals() == 0 { "an integer " } else { "a number " })?;
+    write_range(out, f)?;
+    if f.decimals() > 0 {
+        push_str(out, " with up to ")?;
+        push_u32(out, f.decimals())?;
+        push_str(out, " decimals")?;
+    }
+    Ok(())
+}
+
+/// "0.001..0.300 m/s"
+fn write_range<const N: usize>(out: &mut String<N>, f: Field) -> Result<(), Overflow> {
+    let Some((lo, hi)) = f.range() else { return push_str(out, "left or right") };
+    push_fixed(out, lo, f.decimals())?;
+    push_str(out, "..")?;
+    push_fixed(out, hi, f.decimals())?;
+    if !f.unit().is_empty() {
+        push_str(out, " ")?;
+        push_str(out, f.unit())?;
+    }
+    Ok(())
+}
+
+fn is_space(b: &u8) -> bool {
+    matches!(*b, b' ' | b'\t' | b'\r' | b'\n')
+}
+
+/// Printable ASCII or whitespace.
+fn is_allowed(b: u8) -> bool {
+    (0x20..0x7F).contains(&b) || is_space(&b)
+}
+
+/// The argument words after the command word.
+struct Args<'a, I: Iterator<Item = &'a [u8]>>(I);
+
+impl<'a, I: Iterator<Item = &'a [u8]>> Args<'a, I> {
+    fn required(&mut self, f: Field) -> Result<&'a [u8], ParseError> {
+        self.0.next().ok_or(ParseError::MissingArgument(f))
+    }
+    /// A number in `f`'s range and resolution, scaled by `10^decimals`.
+    fn number(&mut self, f: Field) -> Result<i32, ParseError> {
+        let token = self.required(f)?;
+        number(token, f)
+    }
+    /// The optional trailing duration in seconds (`2.5` or `2.5s`), in ms.
+    fn duration(&mut self) -> Result<Option<u32>, ParseError> {
+        let Some(token) = self.0.next() else { return Ok(None) };
+        let token = match token.split_last() {
+            Some((b's' | b'S', rest)) => rest,
+            _ => token,
+        };
+        // range 1..=MAX_DURATION_MS: non-negative
+        number(token, Field::Duration).map(|ms| Some(ms.unsigned_abs()))
+    }
+}
+
+fn number(token: &[u8], f: Field) -> Result<i32, ParseError> {
+    let v = parse_fixed(token, f.decimals()).map_err(|e| match e {
+        NumError::Bad => ParseError::BadNumber(f),
+        NumError::Range => ParseError::OutOfRange(f),
+    })?;
+    match f.range() {
+        Some((lo, hi)) if (lo..=hi).contains(&v) => Ok(v),
+        _ => Err(ParseError::OutOfRange(f)),
+    }
+}
+
+/// 1/100 command steps to 1/256 steps, rounded (|centi| <= 18_000: no overflow).
+fn centi_to_q8(centi: i32) -> i32 {
+    let q8 = (centi.unsigned_abs() * 256 + 50) / 100;
+    let q8 = q8 as i32; // <= 46_080
+    if centi < 0 {
+        -q8
+    } else {
+        q8
+    }
+}
+
+/// 1/256 command steps to 1/100 steps, rounded half away from zero.
+pub(super) fn q8_to_centi(q8: i32) -> i32 {
+    let c = ((q8.unsigned_abs().min(1 << 22) * 100 + 128) >> 8) as i32; // < 2^29
+    if q8 < 0 {
+        -c
+    } else {
+        c
+    }
+}
+
+const KEYWORDS: &[(&str, Keyword)] = &[
+    ("fwd", Keyword::Forward),
+    ("forward", Keyword::Forward),
+    ("back", Keyword::Backward),
+    ("backward", Keyword::Backward),
+    ("cw", Keyword::Cw),
+    ("ccw", Keyword::Ccw),
+    ("stop", Keyword::Stop),
+    ("s", Keyword::Stop),
+    ("servo", Keyword::Servo),
+    ("trim", Keyword::Trim),
+    ("pose", Keyword::Pose),
+    ("reset", Keyword::Reset),
+    ("cal", Keyword::Calibrate),
+    ("calibrate", Keyword::Calibrate),
+    ("rate", Keyword::Rate),
+    ("status", Keyword::Status),
+    ("help", Keyword::Help),
+    ("?", Keyword::Help),
+];
+
+#[derive(Clone, Copy)]
+enum Keyword {
+    Forward,
+    Backward,
+    Cw,
+    Ccw,
+    Stop,
+    Servo,
+    Trim,
+    Pose,
+    Reset,
+    Calibrate,
+    Rate,
+    Status,
+    Help,
+}
+
+/// Parses one command line (without its terminator; trailing `\r`/`\n` are
+/// whitespace). Words are separated by spaces or tabs; keywords are
+/// case-insensitive. Never panics, allocates nothing.
+pub fn parse(line: &[u8]) -> Result<Command, ParseError> {
+    if line.len() > MAX_LINE {
+        return Err(ParseError::TooLong);
+    }
+    if !line.iter().all(|&b| is_allowed(b)) {
+        return Err(ParseError::NotAscii);
+    }
+    let mut words = line.split(is_space).filter(|w| !w.is_empty());
+    let word = words.next().ok_or(ParseError::Empty)?;
+    let keyword = KEYWORDS
+        .iter()
+        .find(|(name, _)| name.as_bytes().eq_ignore_ascii_case(word))
+        .map(|&(_, k)| k)
+        .ok_or(ParseError::UnknownCommand)?;
+    let mut args = Args(words);
+    let command = match keyword {
+        Keyword::Forward | Keyword::Backward => {
+            let mm_s = args.number(Field::Speed)?; // 1..=MAX_SPEED_MM_S
+            let v = Speed::from_mm_s(mm_s);
+            let v = if matches!(keyword, Keyword::Backward) { v.neg() } else { v };
+            Command::Drive { motion: Motion::Straight(v), duration_ms: args.duration()? }
+        }
+        Keyword::Cw | Keyword::Ccw => {
+            let mrad_s = args.number(Field::TurnRate)?; // 1..=MAX_TURN_MRAD_S
+            let w = TurnRate::from_mrad_s(mrad_s);
+            let w = if matches!(keyword, Keyword::Ccw) { w.neg() } else { w };
+            Command::Drive { motion: Motion::Turn(w), duration_ms: args.duration()? }
+        }
+        Keyword::Stop => Command::Stop,
+        Keyword::Servo => {
+            let left = args.number(Field::LeftCommand)?; // 0..=18_000
+            let right = args.number(Field::RightCommand)?;
+            Command::Servo {
+                left: ServoCmd::from_q8_signed(centi_to_q8(left)),
+                right: ServoCmd::from_q8_signed(centi_to_q8(right)),
+                duration_ms: args.duration()?,
+            }
+        }
+        Keyword::Trim => {
+            let word = args.required(Field::Side)?;
+            let side = if word.eq_ignore_ascii_case(b"left") || word.eq_ignore_ascii_case(b"l") {
+                Side::Left
+            } else if word.eq_ignore_ascii_case(b"right") || word.eq_ignore_ascii_case(b"r") {
+                Side::Right
+            } else {
+                return Err(ParseError::BadChoice(Field::Side));
+            };
+            let centi = args.number(Field::Trim)?; // |.| <= MAX_TRIM_CENTI <= 12_700
+            Command::Trim { side, trim: Trim(centi_to_q8(centi) as i16) }
+        }
+        Keyword::Pose => Command::SetPose {
+            x_mm: args.number(Field::X)?,
+            y_mm: args.number(Field::Y)?,
+            heading: Angle::from_millidegrees(args.number(Field::Heading)?),
+        },
+        Keyword::Reset => Command::SetPose { x_mm: 0, y_mm: 0, heading: Angle::ZERO },
+        Keyword::Calibrate => {
+            let samples = match args.0.next() {
+                None => compass::CALIBRATION_SAMPLES,
+                Some(token) => number(token, Field::Samples)? as u16, // MIN..=MAX_CAL_SAMPLES
+            };
+            Command::Calibrate { samples }
+        }
+        Keyword::Rate => Command::Rate { hz: args.number(Field::Rate)? as u16 }, // 0..=MAX_TELEMETRY_HZ
+        Keyword::Status => Command::Status,
+        Keyword::Help => Command::Help,
+    };
+    if args.0.next().is_some() {
+        return Err(ParseError::TrailingInput);
+    }
+    Ok(command)
+}
+
+fn push_duration<const N: usize>(out: &mut String<N>, duration_ms: Option<u32>) -> Result<(), Overflow> {
+    if let Some(ms) = duration_ms {
+        push_str(out, " ")?;
+        push_fixed(out, ms.min(i32::MAX as u32) as i32, 3)?;
+    }
+    Ok(())
+}
+
+/// Writes the canonical form of a command: the grammar's short keyword and
+/// every number at the field's resolution (`fwd 0.130 2.000`). Parsing the
+/// canonical form gives the same command back.
+pub fn format_command<const N: usize>(cmd: &Command, out: &mut String<N>) -> Result<(), Overflow> {
+    match *cmd {
+        Command::Drive { motion, duration_ms } => {
+            match motion {
+                Motion::Straight(v) => {
+                    push_str(out, if v.to_bits() < 0 { "back " } else { "fwd " })?;
+                    push_fixed(out, v.to_mm_s().saturating_abs(), 3)?;
+                }
+                Motion::Turn(w) => {
+                    push_str(out, if w.to_bits() < 0 { "ccw " } else { "cw " })?;
+                    push_fixed(out, w.to_mrad_s().saturating_abs(), 3)?;
+                }
+                Motion::Stop => push_str(out, "stop")?,
+            }
+            if !matches!(motion, Motion::Stop) {
+                push_duration(out, duration_ms)?;
+            }
+            Ok(())
+        }
+        Command::Stop => push_str(out, "stop"),
+        Command::Servo { left, right, duration_ms } => {
+            push_str(out, "servo ")?;
+            push_fixed(out, left.to_centi() as i32, 2)?; // <= 18_000
+            push_str(out, " ")?;
+            push_fixed(out, right.to_centi() as i32, 2)?;
+            push_duration(out, duration_ms)
+        }
+        Command::Trim { side, trim } => {
+            push_str(out, if side == Side::Left { "trim left " } else { "trim right " })?;
+            push_fixed(out, q8_to_centi(i32::from(trim.0)), 2)
+        }
+        Command::SetPose { x_mm, y_mm, heading } => {
+            push_str(out, "pose ")?;
+            push_fixed(out, x_mm, 0)?;
+            push_str(out, " ")?;
+            push_fixed(out, y_mm, 0)?;
+            push_str(out, " ")?;
+            push_fixed(out, heading.to_millidegrees() as i32, 3) // < 360_000
+        }
+        Command::Calibrate { samples } => {
+            push_str(out, "cal ")?;
+            push_u32(out, u32::from(samples))
+        }
+        Command::Rate { hz } => {
+            push_str(out, "rate ")?;
+            push_u32(out, u32::from(hz))
+        }
+        Command::Status => push_str(out, "status"),
+        Command::Help => push_str(out, "help"),
+    }
+}

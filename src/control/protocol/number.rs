@@ -1,0 +1,132 @@
+//! Decimal numbers in fixed point, with integer code only: parsing a token
+//! like `-0.130` into a scaled integer, and writing a scaled integer back as
+//! a decimal. No `core::fmt` (whose float code would otherwise reach the
+//! robot), no 64-bit multiply or divide: every value is a `u32` magnitude.
+
+use heapless::String;
+
+use super::Overflow;
+
+/// Why a token is not a number.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub enum NumError {
+    /// Not of the form `[+-]digits[.digits]` (or too many decimals).
+    Bad,
+    /// A number, but too large for the value type.
+    Range,
+}
+
+/// Parses `[+-]?(digits)?(.digits)?` (at least one digit, and at least one
+/// after a `.`) into `value * 10^decimals`. Digits past `decimals` must be
+/// zeros (`0.1300` is `0.130`, `0.1305` is [`NumError::Bad`]): the value is
+/// exact or refused, never rounded.
+pub fn parse_fixed(token: &[u8], decimals: u32) -> Result<i32, NumError> {
+    let (negative, body) = match token.split_first() {
+        Some((b'-', rest)) => (true, rest),
+        Some((b'+', rest)) => (false, rest),
+        _ => (false, token),
+    };
+    let mut parts = body.splitn(2, |&b| b == b'.');
+    let int = parts.next().unwrap_or(&[]);
+    let frac = parts.next();
+    // "", "-", "5." and "." are not numbers; ".5" is
+    if frac.is_some_and(<[u8]>::is_empty) || (int.is_empty() && frac.is_none()) {
+        return Err(NumError::Bad);
+    }
+    let mut mag: u32 = 0;
+    let mut push_digit = |d: u8| -> Result<(), NumError> {
+        if !d.is_ascii_digit() {
+            return Err(NumError::Bad);
+        }
+        mag = mag.checked_mul(10).and_then(|m| m.checked_add(u32::from(d - b'0'))).ok_or(NumError::Range)?;
+        Ok(())
+    };
+    for &d in int {
+        push_digit(d)?;
+    }
+    let frac = frac.unwrap_or(&[]);
+    let mut taken: u32 = 0;
+    for &d in frac {
+        if taken < decimals {
+            push_digit(d)?;
+            taken += 1;
+        } else if d != b'0' {
+            // a digit finer than the value's resolution (or not a digit)
+            return Err(NumError::Bad);
+        }
+    }
+    while taken < decimals {
+        push_digit(b'0')?;
+        taken += 1;
+    }
+    let mag = i32::try_from(mag).map_err(|_| NumError::Range)?;
+    // |mag| <= i32::MAX, so the negation cannot overflow
+    Ok(if negative { -mag } else { mag })
+}
+
+/// Appends `s`.
+pub fn push_str<const N: usize>(out: &mut String<N>, s: &str) -> Result<(), Overflow> {
+    out.push_str(s).map_err(|_| Overflow)
+}
+
+/// Appends one ASCII byte (non-ASCII bytes become `?`).
+pub fn push_byte<const N: usize>(out: &mut String<N>, b: u8) -> Result<(), Overflow> {
+    let c = if b.is_ascii() { char::from(b) } else { '?' };
+    out.push(c).map_err(|_| Overflow)
+}
+
+/// Appends `magnitude / 10^decimals` as a decimal with exactly `decimals`
+/// digits after the point (none and no point when `decimals` is 0), with a
+/// `-` in front when `negative` and the magnitude is not zero.
+/// `decimals` above 9 is treated as 9.
+pub fn push_fixed_parts<const N: usize>(
+    out: &mut String<N>,
+    negative: bool,
+    magnitude: u32,
+    decimals: u32,
+) -> Result<(), Overflow> {
+    // u32::MAX has 10 digits; with up to 9 decimals a leading zero makes 10.
+    let mut digits = [0u8; 10];
+    let decimals = decimals.min(9) as usize;
+    let mut len = 0usize;
+    let mut v = magnitude;
+    for slot in digits.iter_mut().rev() {
+        *slot = b'0' + (v % 10) as u8; // v % 10 < 10
+        v /= 10;
+        len += 1;
+        if v == 0 && len > decimals {
+            break;
+        }
+    }
+    if negative && magnitude != 0 {
+        push_byte(out, b'-')?;
+    }
+    // len <= 10 = digits.len(), so the start index cannot underflow
+    let used = digits.get(digits.len() - len..).unwrap_or(&[]);
+    let (int, frac) = used.split_at(len - decimals); // len > decimals
+    for &d in int {
+        push_byte(out, d)?;
+    }
+    if decimals > 0 {
+        push_byte(out, b'.')?;
+        for &d in frac {
+            push_byte(out, d)?;
+        }
+    }
+    Ok(())
+}
+
+/// Appends a signed scaled value as a decimal (see [`push_fixed_parts`]).
+pub fn push_fixed<const N: usize>(out: &mut String<N>, value: i32, decimals: u32) -> Result<(), Overflow> {
+    push_fixed_parts(out, value < 0, value.unsigned_abs(), decimals)
+}
+
+/// Appends an unsigned integer.
+pub fn push_u32<const N: usize>(out: &mut String<N>, value: u32) -> Result<(), Overflow> {
+    push_fixed_parts(out, false, value, 0)
+}
+
+/// Appends a signed integer.
+pub fn push_i32<const N: usize>(out: &mut String<N>, value: i32) -> Result<(), Overflow> {
+    push_fixed(out, value, 0)
+}

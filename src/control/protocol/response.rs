@@ -1,0 +1,164 @@
+//! Lines that are not telemetry: responses, status and help. Every one
+//! starts with `#`, so a plotting script that skips `#` lines reads the
+//! telemetry directly.
+
+use heapless::String;
+
+use super::command::{format_command, q8_to_centi, Command, ParseError};
+use super::number::{push_byte, push_fixed, push_str, push_u32};
+use super::telemetry::{motion_word, FaultCounters};
+use super::Overflow;
+use crate::model::{Motion, Pose, ServoCmd, Trim};
+
+/// Prefix of an accepted command's echo.
+pub const OK: &str = "# ok ";
+/// Prefix of a refusal or failure.
+pub const ERR: &str = "# err ";
+
+/// A one-line answer.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub enum Response<'a> {
+    /// A command was accepted: `# ok <canonical command>`, e.g. `# ok fwd 0.130 2.000`.
+    Ok(&'a Command),
+    /// A line was refused: `# err <problem>`, e.g. `# err speed out of range 0.001..0.300 m/s`.
+    Err(ParseError),
+    /// The control loop refused or aborted something: `# err <text>`.
+    Fail(&'a str),
+    /// Anything else worth saying: `# <text>`.
+    Note(&'a str),
+}
+
+/// Appends text, with any byte that is not printable ASCII replaced by `?`
+/// (keeps the answer on one line).
+fn push_text<const N: usize>(out: &mut String<N>, text: &str) -> Result<(), Overflow> {
+    for b in text.bytes() {
+        push_byte(out, if (0x20..0x7F).contains(&b) { b } else { b'?' })?;
+    }
+    Ok(())
+}
+
+/// Appends a response line (no terminator). On [`Overflow`] the string
+/// holds a partial line: clear it. A `String<`[`super::MAX_RESPONSE`]`>` fits
+/// every `Ok` and `Err` response.
+pub fn format_response<const N: usize>(response: &Response, out: &mut String<N>) -> Result<(), Overflow> {
+    match *response {
+        Response::Ok(cmd) => {
+            push_str(out, OK)?;
+            format_command(cmd, out)
+        }
+        Response::Err(e) => {
+            push_str(out, ERR)?;
+            e.write(out)
+        }
+        Response::Fail(text) => {
+            push_str(out, ERR)?;
+            push_text(out, text)
+        }
+        Response::Note(text) => {
+            push_str(out, "# ")?;
+            push_text(out, text)
+        }
+    }
+}
+
+/// Longest mode word written by [`format_status`], bytes.
+pub const MODE_MAX: usize = 16;
+
+/// What the `status` command reports (the control loop fills it in).
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub struct Status {
+    /// Time since boot, ms.
+    pub t_ms: u32,
+    /// The loop's mode in one word, e.g. `idle`, `drive`, `servo`, `cal`.
+    pub mode: &'static str,
+    pub motion: Motion,
+    /// Time left of a timed command, ms.
+    pub remaining_ms: Option<u32>,
+    pub pose: Pose,
+    pub left_cmd: ServoCmd,
+    pub right_cmd: ServoCmd,
+    pub left_trim: Trim,
+    pub right_trim: Trim,
+    /// Telemetry rate, Hz (0 = off).
+    pub rate_hz: u16,
+    /// Whether each sensor is up.
+    pub front_ok: bool,
+    pub right_ok: bool,
+    pub compass_ok: bool,
+    pub faults: FaultCounters,
+}
+
+/// Appends the status line (no terminator), `key=value` pairs:
+/// `# status t_ms=1200 mode=drive motion=fwd v_mps=0.130 w_radps=0.000 left_ms=800 x_mm=12 y_mm=-3
+/// heading_deg=90.000 left_cmd=107.00 right_cmd=61.00 trim_left=0.00 trim_right=-1.50 rate_hz=10
+/// front=ok right=ok compass=down faults=0/0/0/0/0/0` (one line; `left_ms` only for timed
+/// commands; faults in telemetry column order). Fits in [`super::MAX_OUT_LINE`].
+pub fn format_status<const N: usize>(s: &Status, out: &mut String<N>) -> Result<(), Overflow> {
+    let (v, w) = match s.motion {
+        Motion::Stop => (0, 0),
+        Motion::Straight(v) => (v.to_mm_s(), 0),
+        Motion::Turn(w) => (0, w.to_mrad_s()),
+    };
+    push_str(out, "# status t_ms=")?;
+    push_u32(out, s.t_ms)?;
+    push_str(out, " mode=")?;
+    // at most MODE_MAX bytes of the mode word (it may be any &str)
+    push_text(out, s.mode.get(..s.mode.len().min(MODE_MAX)).unwrap_or("?"))?;
+    push_str(out, " motion=")?;
+    push_str(out, motion_word(s.motion.kind()))?;
+    push_str(out, " v_mps=")?;
+    push_fixed(out, v, 3)?;
+    push_str(out, " w_radps=")?;
+    push_fixed(out, w, 3)?;
+    if let Some(ms) = s.remaining_ms {
+        push_str(out, " left_ms=")?;
+        push_u32(out, ms)?;
+    }
+    push_str(out, " x_mm=")?;
+    push_fixed(out, s.pose.x.to_length().to_mm(), 0)?;
+    push_str(out, " y_mm=")?;
+    push_fixed(out, s.pose.y.to_length().to_mm(), 0)?;
+    push_str(out, " heading_deg=")?;
+    push_fixed(out, s.pose.theta.to_millidegrees() as i32, 3)?; // < 360_000
+    push_str(out, " left_cmd=")?;
+    push_fixed(out, s.left_cmd.to_centi() as i32, 2)?; // <= 18_000
+    push_str(out, " right_cmd=")?;
+    push_fixed(out, s.right_cmd.to_centi() as i32, 2)?;
+    push_str(out, " trim_left=")?;
+    push_fixed(out, q8_to_centi(i32::from(s.left_trim.0)), 2)?;
+    push_str(out, " trim_right=")?;
+    push_fixed(out, q8_to_centi(i32::from(s.right_trim.0)), 2)?;
+    push_str(out, " rate_hz=")?;
+    push_u32(out, u32::from(s.rate_hz))?;
+    for (name, ok) in [(" front=", s.front_ok), (" right=", s.right_ok), (" compass=", s.compass_ok)] {
+        push_str(out, name)?;
+        push_str(out, if ok { "ok" } else { "down" })?;
+    }
+    push_str(out, " faults=")?;
+    let f = &s.faults;
+    for (i, count) in [f.bus, f.timeout, f.missing, f.bad_sample, f.rejected_outliers, f.overruns].into_iter().enumerate()
+    {
+        if i > 0 {
+            push_str(out, "/")?;
+        }
+        push_u32(out, count)?;
+    }
+    Ok(())
+}
+
+/// The `help` answer, one line each (ranges as in `config::serial`; a test
+/// checks they match).
+pub const HELP: &[&str] = &[
+    "# commands (one per line, words separated by spaces, case-insensitive):",
+    "#  fwd|back <m/s> [<s>]   drive straight, speed 0.001..0.300, optional duration 0.001..60.000 s",
+    "#  cw|ccw <rad/s> [<s>]   turn in place, rate 0.001..6.000",
+    "#  stop (or s)            both servos to neutral",
+    "#  servo <l> <r> [<s>]    raw servo commands 0.00..180.00 (90 = stop), no trim",
+    "#  trim left|right <steps> servo neutral offset -10.00..10.00",
+    "#  pose <x mm> <y mm> <deg> set the pose, |x|,|y| <= 30000, heading -360.000..360.000",
+    "#  reset                  pose 0 0 0",
+    "#  cal [<samples>]        magnetometer calibration sweep, 250..10000 samples (default 1000)",
+    "#  rate <Hz>              telemetry rows per second 0..100 (0 = off)",
+    "#  status | help",
+    "# telemetry: CSV rows after a header line; lines starting with # are not telemetry",
+];
