@@ -129,6 +129,15 @@ pub mod lidar {
     /// Wait after releasing XSHUT before talking to the chip, us (datasheet
     /// boot time 1.2 ms, with margin).
     pub const BOOT_TIME_US: u32 = 2_000;
+    /// How long XSHUT is held low to reset a lidar, us (the datasheet gives
+    /// no minimum; Adafruit's two-sensor example holds it 10 ms).
+    pub const RESET_TIME_US: u32 = 10_000;
+    /// Consecutive reads of one status register the bring-up may make while
+    /// it waits for the chip (SPAD info, reference calibrations) before it
+    /// gives up with a timeout: about 0.2 s at 100 us a read (three bytes at
+    /// 400 kHz). The vl53l0x crate's own limits (10000 and 65535 reads)
+    /// would block the robot for seconds.
+    pub const INIT_POLL_LIMIT: u16 = 2_000;
 }
 
 /// The MPU9250's AK8963 magnetometer.
@@ -155,6 +164,21 @@ pub mod compass {
     pub const CALIBRATION_SAMPLES: u16 = 1000;
     /// A sweep must visit this many of 12 30-degree sectors to be accepted.
     pub const CALIBRATION_MIN_SECTORS: u8 = 11;
+    /// A calibration sample only marks a sector if its horizontal field,
+    /// seen from the sweep's running centre, is at least this long (larger
+    /// component), ASA-adjusted counts: 7.5 uT at 0.15 uT per count, a
+    /// third of the horizontal field at UCLA (~24 uT, NOAA WMM), well above
+    /// the AK8963's noise (a few counts), so a robot standing still visits
+    /// no sectors.
+    pub const CALIBRATION_MIN_RADIUS: i32 = 50;
+
+    /// Wait after the MPU9250's device reset (PWR_MGMT_1 H_RESET), us: the
+    /// register start-up time is 100 ms (MPU-9250 datasheet, table 6.2;
+    /// the mpu9250 crate waits the same).
+    pub const MPU_RESET_TIME_US: u32 = 100_000;
+    /// Wait after each AK8963 mode change, us: at least 100 us in power-down
+    /// before the next mode (AK8963 datasheet 6.3), with margin.
+    pub const MODE_CHANGE_US: u32 = 200;
 }
 
 /// Wiring (PAPERBOT; NodeMCU label in brackets).

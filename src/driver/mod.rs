@@ -63,3 +63,19 @@ pub trait Servos {
     /// caller through the actuator model).
     fn set(&mut self, left: ServoCmd, right: ServoCmd);
 }
+
+/// A compass whose hard- and soft-iron calibration can be measured and
+/// replaced at run time (see [`calibration::MagCalibrator`]).
+pub trait MagCalibrate {
+    /// The chip's factory sensitivity adjustment (read at bring-up).
+    fn asa(&self) -> [u8; 3];
+    /// The calibration in use.
+    fn calibration(&self) -> crate::model::compass::MagCalibration;
+    /// Replaces the calibration (e.g. with a fresh sweep's result).
+    fn set_calibration(&mut self, calibration: crate::model::compass::MagCalibration);
+}
+
+pub mod bus;
+pub mod calibration;
+pub mod compass;
+pub mod lidar;
