@@ -229,6 +229,13 @@ pub mod timing {
     pub const SENSOR_RETRY_MS: u32 = 1_000;
     /// A lidar reading older than this is stale, ms.
     pub const LIDAR_STALE_MS: u32 = 200;
+    /// A sensor that delivers nothing for this long is taken as failed
+    /// (counted as a timeout, re-initialised after `SENSOR_RETRY_MS`), ms:
+    /// 15 lidar periods (33 ms) or 50 compass periods (10 ms at 100 Hz).
+    pub const SENSOR_SILENT_MS: u32 = 500;
+    /// Bus errors in a row before a sensor is taken down: one glitch (e.g.
+    /// a servo's current surge on the bus) only costs that sample.
+    pub const SENSOR_MAX_BUS_ERRORS: u8 = 3;
 }
 
 /// Serial port.

@@ -2,3 +2,6 @@
 //! telemetry) and the serial protocol.
 
 pub mod protocol;
+pub mod tick;
+
+pub use tick::{Controller, LineSink, Mode, SensorHealth, TICK_US};

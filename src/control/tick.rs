@@ -1,0 +1,672 @@
+//! The control loop: one [`Controller::tick`] per loop period
+//! ([`config::timing::LOOP_HZ`]).
+//!
+//! Each tick, in this order:
+//! 1. time: the elapsed time since the previous tick (`now_us` is a free-running,
+//!    wrapping microsecond counter; the loop keeps its own 64-bit clock);
+//! 2. state update: the pose moves by the motion the servos were driving
+//!    since the previous tick ([`model::step`], and the estimator's predict);
+//! 3. sensing: each sensor is polled once, never waited for; a fresh reading
+//!    updates the estimator; a failed sensor is counted, marked down and
+//!    re-initialised after [`config::timing::SENSOR_RETRY_MS`];
+//! 4. deciding: a timed command that has run out, or the deadman
+//!    ([`config::timing::DEADMAN_MS`] without a command), stops the robot;
+//! 5. acting: the servo commands of the current mode go to the servos
+//!    (computed once per command by the inverse actuator model, so the tick
+//!    does no division);
+//! 6. telemetry, at its own rate.
+//!
+//! Command bytes arrive between ticks through [`Controller::feed`]; every
+//! output line (telemetry, responses) goes to a [`LineSink`]. The loop owns
+//! no hardware type: it runs the same on the robot, in tests and in the
+//! simulator (`sim::robot`).
+//!
+//! Deadman: an untimed `fwd`/`back`/`cw`/`ccw`/`servo` runs until the next
+//! command or until no valid command came for `DEADMAN_MS`. A timed one runs
+//! for its duration (at most `config::serial::MAX_DURATION_MS`) and is its
+//! own deadman. A calibration sweep stops when it has its samples or after
+//! [`config::compass::CALIBRATION_TIMEOUT_MS`]. Any valid command refreshes
+//! the deadman; a malformed line gets one `# err` line and changes nothing.
+//!
+//! No allocation, no panics: every buffer is a bounded `heapless` one, every
+//! clock difference is wrapping or saturating, every index is checked.
+
+use heapless::String;
+
+use crate::config;
+use crate::control::protocol::{
+    format_response, format_status, format_telemetry, telemetry_header, Command, FaultCounters, LineBuffer,
+    ParseError, Response, Side, Status, Telemetry, HELP, MAX_OUT_LINE,
+};
+use crate::driver::{CompassSample, HeadingSensor, LidarSample, SensorError, Servos};
+use crate::math::{Coord, Dt, Length};
+use crate::model::{step, ActuatorModel, Drive, Motion, Pose, ServoCmd};
+
+/// Where the loop writes its output lines (without terminators): the UART
+/// on the robot, a `Vec<String>` in tests, a channel in the simulator.
+pub trait LineSink {
+    fn write_line(&mut self, line: &str);
+}
+
+/// Loop period, us.
+pub const TICK_US: u32 = 1_000_000 / config::timing::LOOP_HZ;
+/// A tick later than this after the previous one counts as an overrun, us.
+const OVERRUN_US: u32 = TICK_US + TICK_US / 2;
+const _: () = assert!(config::timing::LOOP_HZ >= 1 && config::timing::LOOP_HZ <= 1_000);
+
+/// ms to us, in 64 bits (no overflow for any u32).
+const fn ms_to_us(ms: u32) -> u64 {
+    ms as u64 * 1_000
+}
+
+/// One sensor's health.
+#[derive(Clone, Copy, PartialEq, Eq, Debug, Default)]
+pub struct SensorHealth {
+    /// False while the sensor is failed and waiting to be re-initialised.
+    pub up: bool,
+    /// The last error seen (cleared by nothing: for `status`).
+    pub last_error: Option<SensorError>,
+    /// Successful re-initialisations since boot.
+    pub reinits: u32,
+    /// Bus errors in a row (a single glitch does not take a sensor down).
+    consecutive_bus_errors: u8,
+    /// When a failed sensor is tried again, loop clock us.
+    retry_at_us: u64,
+    /// When the sensor last delivered, loop clock us.
+    last_sample_us: u64,
+}
+
+impl SensorHealth {
+    fn new() -> SensorHealth {
+        SensorHealth { up: true, ..SensorHealth::default() }
+    }
+}
+
+/// What the loop is doing.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub enum Mode {
+    /// Stopped: servos at neutral.
+    Idle,
+    /// Driving a motion through the inverse actuator model (`drive` holds
+    /// the servo commands and the motion they make by the model).
+    Drive { drive: Drive, timer: Timer },
+    /// Raw servo commands; `motion` is what the forward model says they do.
+    Servo { left: ServoCmd, right: ServoCmd, motion: Motion, timer: Timer },
+    /// Turning in place while the magnetometer calibration collects samples.
+    Calibrate { drive: Drive, timer: Timer },
+}
+
+impl Mode {
+    /// The mode's word in `status`.
+    pub fn word(&self) -> &'static str {
+        match self {
+            Mode::Idle => "idle",
+            Mode::Drive { .. } => "drive",
+            Mode::Servo { .. } => "servo",
+            Mode::Calibrate { .. } => "cal",
+        }
+    }
+    fn timer(&self) -> Option<&Timer> {
+        match self {
+            Mode::Idle => None,
+            Mode::Drive { timer, .. } | Mode::Servo { timer, .. } | Mode::Calibrate { timer, .. } => Some(timer),
+        }
+    }
+    fn timer_mut(&mut self) -> Option<&mut Timer> {
+        match self {
+            Mode::Idle => None,
+            Mode::Drive { timer, .. } | Mode::Servo { timer, .. } | Mode::Calibrate { timer, .. } => Some(timer),
+        }
+    }
+}
+
+/// How long a mode runs: for `duration_us` from the first tick that drives
+/// it (so a command runs for its whole duration whenever it arrives between
+/// ticks), or, without a duration, until the deadman.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub struct Timer {
+    duration_us: Option<u64>,
+    started_us: Option<u64>,
+}
+
+impl Timer {
+    fn new(duration_ms: Option<u32>) -> Timer {
+        Timer { duration_us: duration_ms.map(ms_to_us), started_us: None }
+    }
+    /// Time left at `now`, us (`None` for an untimed mode).
+    fn remaining_us(&self, now: u64) -> Option<u64> {
+        let d = self.duration_us?;
+        Some(match self.started_us {
+            None => d,
+            Some(s) => d.saturating_sub(now.saturating_sub(s)),
+        })
+    }
+}
+
+/// The control loop, generic over the drivers (see the module docs).
+pub struct Controller<F, R, C, S> {
+    front: F,
+    right: R,
+    compass: C,
+    servos: S,
+    /// The actuator model with the run-time trims.
+    model: ActuatorModel,
+    input: LineBuffer,
+    out: String<MAX_OUT_LINE>,
+
+    /// Loop clock, us since the first tick.
+    clock_us: u64,
+    /// The `now_us` of the previous tick (`None` before the first).
+    last_now_us: Option<u32>,
+    /// A valid command arrived since the last tick.
+    command_seen: bool,
+    /// When the last valid command was seen, loop clock us.
+    last_command_us: u64,
+
+    mode: Mode,
+    /// Servo commands and motion applied at the last tick.
+    applied: Drive,
+    /// Dead-reckoned pose (the state update alone).
+    pose: Pose,
+
+    telemetry_hz: u16,
+    telemetry_period_us: u64,
+    next_telemetry_us: u64,
+    header_due: bool,
+    /// Fresh readings since the last telemetry row.
+    fresh_front: Option<LidarSample>,
+    fresh_right: Option<LidarSample>,
+    fresh_compass: Option<CompassSample>,
+    /// Newest readings (for the estimator and tests).
+    last_front: Option<LidarSample>,
+    last_right: Option<LidarSample>,
+    last_compass: Option<CompassSample>,
+
+    health_front: SensorHealth,
+    health_right: SensorHealth,
+    health_compass: SensorHealth,
+    faults: FaultCounters,
+    ticks: u64,
+}
+
+/// Which sensor (for the shared fault handling).
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+enum Which {
+    Front,
+    Right,
+    Compass,
+}
+
+impl<F, R, C, S> Controller<F, R, C, S>
+where
+    F: crate::driver::RangeSensor,
+    R: crate::driver::RangeSensor,
+    C: HeadingSensor,
+    S: Servos,
+{
+    /// A loop over sensors the caller has brought up (a sensor that fails
+    /// later is re-initialised by the loop), starting at `pose`, stopped.
+    pub fn new(front: F, right: R, compass: C, servos: S, pose: Pose) -> Self {
+        let model = config::actuators::MODEL;
+        let mut c = Controller {
+            front,
+            right,
+            compass,
+            servos,
+            model,
+            input: LineBuffer::new(),
+            out: String::new(),
+            clock_us: 0,
+            last_now_us: None,
+            command_seen: false,
+            last_command_us: 0,
+            mode: Mode::Idle,
+            applied: model.stop(),
+            pose,
+            telemetry_hz: 0,
+            telemetry_period_us: 0,
+            next_telemetry_us: 0,
+            header_due: false,
+            fresh_front: None,
+            fresh_right: None,
+            fresh_compass: None,
+            last_front: None,
+            last_right: None,
+            last_compass: None,
+            health_front: SensorHealth::new(),
+            health_right: SensorHealth::new(),
+            health_compass: SensorHealth::new(),
+            faults: FaultCounters::default(),
+            ticks: 0,
+        };
+        // config::timing::TELEMETRY_HZ is asserted below to fit the protocol's range
+        c.set_rate(config::timing::TELEMETRY_HZ as u16);
+        c
+    }
+
+    // ---- inputs ------------------------------------------------------
+
+    /// Takes one received serial byte; a finished line is parsed and
+    /// handled at once (its answer goes to `sink`).
+    pub fn feed(&mut self, byte: u8, sink: &mut impl LineSink) {
+        match self.input.push(byte) {
+            None => {}
+            Some(Err(e)) => self.respond(&Response::Err(e), sink),
+            Some(Ok(line)) => match line.parse() {
+                Ok(cmd) => self.handle(cmd, sink),
+                Err(ParseError::Empty) => {}
+                Err(e) => self.respond(&Response::Err(e), sink),
+            },
+        }
+    }
+
+    /// [`Controller::feed`] for each byte.
+    pub fn feed_bytes(&mut self, bytes: &[u8], sink: &mut impl LineSink) {
+        for &b in bytes {
+            self.feed(b, sink);
+        }
+    }
+
+    /// Carries out one parsed command (answers `# ok <command>` first).
+    pub fn handle(&mut self, cmd: Command, sink: &mut impl LineSink) {
+        self.command_seen = true;
+        match cmd {
+            Command::Drive { motion, duration_ms } => {
+                self.respond(&Response::Ok(&cmd), sink);
+                let drive = self.model.drive(motion);
+                self.mode = Mode::Drive { drive, timer: Timer::new(duration_ms) };
+                if drive.saturated {
+                    self.respond(&Response::Note("clamped to the measured range of the actuator model"), sink);
+                }
+            }
+            Command::Stop => {
+                self.respond(&Response::Ok(&cmd), sink);
+                self.mode = Mode::Idle;
+            }
+            Command::Servo { left, right, duration_ms } => {
+                self.respond(&Response::Ok(&cmd), sink);
+                let motion = self.model.motion_from_commands(left, right);
+                self.mode = Mode::Servo { left, right, motion, timer: Timer::new(duration_ms) };
+            }
+            Command::Trim { side, trim } => {
+                self.respond(&Response::Ok(&cmd), sink);
+                match side {
+                    Side::Left => self.model.left_trim = trim,
+                    Side::Right => self.model.right_trim = trim,
+                }
+                // the neutral moved: recompute a running drive's commands
+                if let Mode::Drive { drive, .. } = &mut self.mode {
+                    *drive = self.model.drive(drive.motion);
+                }
+            }
+            Command::SetPose { x_mm, y_mm, heading } => {
+                self.respond(&Response::Ok(&cmd), sink);
+                self.pose = Pose::new(
+                    Coord::from_length(Length::from_mm(x_mm)),
+                    Coord::from_length(Length::from_mm(y_mm)),
+                    heading,
+                );
+            }
+            Command::Calibrate { samples: _ } => {
+                self.respond(&Response::Fail("calibration is not available yet"), sink);
+            }
+            Command::Rate { hz } => {
+                self.respond(&Response::Ok(&cmd), sink);
+                self.set_rate(hz);
+            }
+            Command::Status => {
+                self.respond(&Response::Ok(&cmd), sink);
+                let status = self.status();
+                self.out.clear();
+                if format_status(&status, &mut self.out).is_ok() {
+                    sink.write_line(&self.out);
+                }
+            }
+            Command::Help => {
+                self.respond(&Response::Ok(&cmd), sink);
+                for line in HELP {
+                    sink.write_line(line);
+                }
+            }
+        }
+    }
+
+    fn respond(&mut self, r: &Response, sink: &mut impl LineSink) {
+        self.out.clear();
+        if format_response(r, &mut self.out).is_ok() {
+            sink.write_line(&self.out);
+        }
+    }
+
+    fn set_rate(&mut self, hz: u16) {
+        let was_off = self.telemetry_hz == 0;
+        self.telemetry_hz = hz;
+        self.telemetry_period_us = if hz == 0 { 0 } else { 1_000_000 / u64::from(hz) };
+        // the first row at the next tick (after the header if telemetry was off)
+        self.next_telemetry_us = self.clock_us;
+        if hz != 0 && was_off {
+            self.header_due = true;
+        }
+    }
+
+    // ---- the tick ----------------------------------------------------
+
+    /// Runs one loop iteration at `now_us` (a free-running microsecond
+    /// counter that may wrap; call it every [`TICK_US`]).
+    pub fn tick(&mut self, now_us: u32, sink: &mut impl LineSink) {
+        // 1. time
+        let dt_us = match self.last_now_us {
+            None => 0,
+            Some(last) => now_us.wrapping_sub(last),
+        };
+        self.last_now_us = Some(now_us);
+        self.clock_us = self.clock_us.saturating_add(u64::from(dt_us));
+        self.ticks = self.ticks.saturating_add(1);
+        if dt_us > OVERRUN_US {
+            self.faults.overruns = self.faults.overruns.saturating_add(1);
+        }
+        let now = self.clock_us;
+        if core::mem::take(&mut self.command_seen) {
+            self.last_command_us = now;
+        }
+
+        // 2. state update with what the servos drove since the last tick
+        self.advance(self.applied.motion, dt_us);
+
+        // 3. sensing
+        self.sense(now);
+
+        // 4. deciding
+        self.decide(now, sink);
+
+        // 5. acting
+        self.applied = self.current_drive();
+        self.servos.set(self.applied.left, self.applied.right);
+        if let Some(t) = self.mode.timer_mut() {
+            if t.started_us.is_none() {
+                t.started_us = Some(now);
+            }
+        }
+
+        // 6. telemetry
+        self.telemetry(now, sink);
+    }
+
+    /// Integrates `motion` over `dt_us` in steps of at most [`Dt::MAX`]
+    /// (a late tick of up to a second is integrated in full; beyond that
+    /// the robot has stopped by the deadman anyway).
+    fn advance(&mut self, motion: Motion, dt_us: u32) {
+        const MAX_STEPS: u32 = 16; // 16 * 65.5 ms > 1 s
+        let mut left = dt_us;
+        let mut n = 0;
+        while left > 0 && n < MAX_STEPS {
+            let dt = Dt::from_micros_saturating(left);
+            self.pose = step(&self.pose, motion, dt);
+            left -= dt.as_micros(); // dt <= left
+            n += 1;
+        }
+    }
+
+    fn sense(&mut self, now: u64) {
+        if let Some(Reading::Lidar(s)) = self.service(Which::Front, now) {
+            self.fresh_front = Some(s);
+            self.last_front = Some(s);
+        }
+        if let Some(Reading::Lidar(s)) = self.service(Which::Right, now) {
+            self.fresh_right = Some(s);
+            self.last_right = Some(s);
+        }
+        if let Some(Reading::Compass(s)) = self.service(Which::Compass, now) {
+            self.fresh_compass = Some(s);
+            self.last_compass = Some(s);
+        }
+    }
+
+    /// Polls one sensor (or re-initialises it when its back-off is over).
+    fn service(&mut self, which: Which, now: u64) -> Option<Reading> {
+        let health = *self.health(which);
+        if !health.up {
+            if now < health.retry_at_us {
+                return None;
+            }
+            let result = match which {
+                Which::Front => self.front.reinit(),
+                Which::Right => self.right.reinit(),
+                Which::Compass => self.compass.reinit(),
+            };
+            match result {
+                Ok(()) => {
+                    let h = self.health_mut(which);
+                    h.up = true;
+                    h.reinits = h.reinits.saturating_add(1);
+                    h.consecutive_bus_errors = 0;
+                    h.last_sample_us = now;
+                }
+                Err(e) => self.fail(which, e, now),
+            }
+            return None;
+        }
+        let polled = match which {
+            Which::Front => self.front.poll().map(Reading::Lidar),
+            Which::Right => self.right.poll().map(Reading::Lidar),
+            Which::Compass => self.compass.poll().map(Reading::Compass),
+        };
+        match polled {
+            Ok(r) => {
+                let h = self.health_mut(which);
+                h.last_sample_us = now;
+                h.consecutive_bus_errors = 0;
+                Some(r)
+            }
+            Err(nb::Error::WouldBlock) => {
+                let silent = now.saturating_sub(health.last_sample_us);
+                if silent >= ms_to_us(config::timing::SENSOR_SILENT_MS) {
+                    self.fail(which, SensorError::Timeout, now);
+                }
+                None
+            }
+            Err(nb::Error::Other(e)) => {
+                self.fail(which, e, now);
+                None
+            }
+        }
+    }
+
+    /// Counts a fault; takes the sensor down unless it was a dropped sample
+    /// or one of too few bus errors in a row.
+    fn fail(&mut self, which: Which, e: SensorError, now: u64) {
+        let f = &mut self.faults;
+        let counter = match e {
+            SensorError::Bus => &mut f.bus,
+            SensorError::Timeout => &mut f.timeout,
+            SensorError::Missing | SensorError::NotReady => &mut f.missing,
+            SensorError::BadSample => &mut f.bad_sample,
+        };
+        *counter = counter.saturating_add(1);
+        let h = self.health_mut(which);
+        h.last_error = Some(e);
+        let down = match e {
+            SensorError::BadSample => false,
+            SensorError::Bus => {
+                h.consecutive_bus_errors = h.consecutive_bus_errors.saturating_add(1);
+                h.consecutive_bus_errors >= config::timing::SENSOR_MAX_BUS_ERRORS
+            }
+            _ => true,
+        };
+        if down || !h.up {
+            h.up = false;
+            h.retry_at_us = now.saturating_add(ms_to_us(config::timing::SENSOR_RETRY_MS));
+        }
+    }
+
+    fn health(&self, which: Which) -> &SensorHealth {
+        match which {
+            Which::Front => &self.health_front,
+            Which::Right => &self.health_right,
+            Which::Compass => &self.health_compass,
+        }
+    }
+    fn health_mut(&mut self, which: Which) -> &mut SensorHealth {
+        match which {
+            Which::Front => &mut self.health_front,
+            Which::Right => &mut self.health_right,
+            Which::Compass => &mut self.health_compass,
+        }
+    }
+
+    fn decide(&mut self, now: u64, sink: &mut impl LineSink) {
+        let Some(timer) = self.mode.timer().copied() else { return };
+        match timer.remaining_us(now) {
+            Some(0) => {
+                self.mode = Mode::Idle;
+                self.respond(&Response::Note("done"), sink);
+            }
+            Some(_) => {}
+            None => {
+                if now.saturating_sub(self.last_command_us) >= ms_to_us(config::timing::DEADMAN_MS) {
+                    self.mode = Mode::Idle;
+                    self.respond(&Response::Note("deadman: no command, stopped"), sink);
+                }
+            }
+        }
+    }
+
+    /// The servo commands and motion of the current mode.
+    fn current_drive(&self) -> Drive {
+        match self.mode {
+            Mode::Idle => self.model.stop(),
+            Mode::Drive { drive, .. } | Mode::Calibrate { drive, .. } => drive,
+            Mode::Servo { left, right, motion, .. } => Drive { left, right, motion, saturated: false },
+        }
+    }
+
+    fn telemetry(&mut self, now: u64, sink: &mut impl LineSink) {
+        if self.telemetry_hz == 0 || now < self.next_telemetry_us {
+            return;
+        }
+        if core::mem::take(&mut self.header_due) {
+            sink.write_line(telemetry_header());
+        }
+        // keep the schedule; after a stall, start again from now
+        self.next_telemetry_us = self.next_telemetry_us.saturating_add(self.telemetry_period_us);
+        if self.next_telemetry_us <= now {
+            self.next_telemetry_us = now.saturating_add(self.telemetry_period_us);
+        }
+        let t = Telemetry {
+            t_ms: self.t_ms(),
+            pose: self.pose,
+            front: self.fresh_front.take(),
+            right: self.fresh_right.take(),
+            compass: self.fresh_compass.take(),
+            motion: self.applied.motion,
+            left_cmd: self.applied.left,
+            right_cmd: self.applied.right,
+            faults: self.faults,
+        };
+        self.out.clear();
+        if format_telemetry(&t, &mut self.out).is_ok() {
+            sink.write_line(&self.out);
+        }
+    }
+
+    // ---- views -------------------------------------------------------
+
+    /// Loop clock in ms (wraps after 49 days: the truncation is intended).
+    pub fn t_ms(&self) -> u32 {
+        (self.clock_us / 1_000) as u32
+    }
+    /// Loop clock, us since the first tick.
+    pub fn clock_us(&self) -> u64 {
+        self.clock_us
+    }
+    /// The pose the telemetry reports.
+    pub fn pose(&self) -> Pose {
+        self.pose
+    }
+    /// The dead-reckoned pose (the state update alone).
+    pub fn dead_reckoned(&self) -> Pose {
+        self.pose
+    }
+    pub fn mode(&self) -> Mode {
+        self.mode
+    }
+    /// The servo commands and motion set at the last tick.
+    pub fn applied(&self) -> Drive {
+        self.applied
+    }
+    pub fn model(&self) -> &ActuatorModel {
+        &self.model
+    }
+    pub fn faults(&self) -> FaultCounters {
+        self.faults
+    }
+    pub fn telemetry_hz(&self) -> u16 {
+        self.telemetry_hz
+    }
+    pub fn ticks(&self) -> u64 {
+        self.ticks
+    }
+    pub fn front_health(&self) -> SensorHealth {
+        self.health_front
+    }
+    pub fn right_health(&self) -> SensorHealth {
+        self.health_right
+    }
+    pub fn compass_health(&self) -> SensorHealth {
+        self.health_compass
+    }
+    pub fn last_front(&self) -> Option<LidarSample> {
+        self.last_front
+    }
+    pub fn last_right(&self) -> Option<LidarSample> {
+        self.last_right
+    }
+    pub fn last_compass(&self) -> Option<CompassSample> {
+        self.last_compass
+    }
+    /// The drivers, e.g. for a simulator that reads the servo commands or
+    /// sets a fake chip's truth.
+    pub fn front(&mut self) -> &mut F {
+        &mut self.front
+    }
+    pub fn right(&mut self) -> &mut R {
+        &mut self.right
+    }
+    pub fn compass(&mut self) -> &mut C {
+        &mut self.compass
+    }
+    pub fn servos(&mut self) -> &mut S {
+        &mut self.servos
+    }
+
+    /// What `status` reports.
+    pub fn status(&self) -> Status {
+        let now = self.clock_us;
+        let remaining_ms =
+            self.mode.timer().and_then(|t| t.remaining_us(now)).map(|us| (us / 1_000).min(u64::from(u32::MAX)) as u32);
+        Status {
+            t_ms: self.t_ms(),
+            mode: self.mode.word(),
+            motion: self.applied.motion,
+            remaining_ms,
+            pose: self.pose,
+            left_cmd: self.applied.left,
+            right_cmd: self.applied.right,
+            left_trim: self.model.left_trim,
+            right_trim: self.model.right_trim,
+            rate_hz: self.telemetry_hz,
+            front_ok: self.health_front.up,
+            right_ok: self.health_right.up,
+            compass_ok: self.health_compass.up,
+            faults: self.faults,
+        }
+    }
+}
+
+/// A fresh reading from one of the sensors.
+enum Reading {
+    Lidar(LidarSample),
+    Compass(CompassSample),
+}
+
+const _: () = assert!(config::timing::TELEMETRY_HZ <= config::serial::MAX_TELEMETRY_HZ as u32);

@@ -1,0 +1,63 @@
+//! The arena: an axis-aligned box with its origin at a corner, x along the
+//! long side (north), y along the short side (east), in mm, and ray casting
+//! to its walls in f64 (host only).
+
+use crate::config;
+
+/// A box `[0, length_x] x [0, width_y]`, mm.
+#[derive(Clone, Copy, PartialEq, Debug)]
+pub struct Arena {
+    pub length_x: f64,
+    pub width_y: f64,
+}
+
+impl Default for Arena {
+    /// The team's box (config::arena).
+    fn default() -> Arena {
+        Arena { length_x: config::arena::LENGTH_X.to_mm_f64(), width_y: config::arena::WIDTH_Y.to_mm_f64() }
+    }
+}
+
+impl Arena {
+    pub fn new(length_x: f64, width_y: f64) -> Arena {
+        Arena { length_x, width_y }
+    }
+
+    /// True when (x, y) is inside the box (walls included).
+    pub fn contains(&self, x: f64, y: f64) -> bool {
+        (0.0..=self.length_x).contains(&x) && (0.0..=self.width_y).contains(&y)
+    }
+
+    /// Distance from (x, y) to the nearest wall, mm (negative outside).
+    pub fn clearance(&self, x: f64, y: f64) -> f64 {
+        x.min(self.length_x - x).min(y).min(self.width_y - y)
+    }
+
+    /// Distance along the ray from (x, y) in direction `heading` (radians,
+    /// clockwise from north: direction `(cos, sin)` in (x, y)) to the first
+    /// wall it meets, mm; `None` if it meets none (a ray from outside that
+    /// misses the box). A ray from inside always hits.
+    pub fn ray_cast(&self, x: f64, y: f64, heading: f64) -> Option<f64> {
+        let (dy, dx) = heading.sin_cos();
+        let mut best: Option<f64> = None;
+        let mut consider = |t: f64, other: f64, lo: f64, hi: f64| {
+            // tolerance for hits exactly on a corner
+            if t >= 0.0 && other >= lo - 1e-9 && other <= hi + 1e-9 && best.is_none_or(|b| t < b) {
+                best = Some(t);
+            }
+        };
+        if dx != 0.0 {
+            for wall in [0.0, self.length_x] {
+                let t = (wall - x) / dx;
+                consider(t, y + t * dy, 0.0, self.width_y);
+            }
+        }
+        if dy != 0.0 {
+            for wall in [0.0, self.width_y] {
+                let t = (wall - y) / dy;
+                consider(t, x + t * dx, 0.0, self.length_x);
+            }
+        }
+        best
+    }
+}

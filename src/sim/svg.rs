@@ -1,0 +1,103 @@
+//! An SVG picture of a simulated run: the arena, the true path and the
+//! firmware's estimated (and dead-reckoned) paths, with start and end
+//! poses. North (x) points up, east (y) to the right, 1 px per mm.
+
+use super::arena::Arena;
+use super::body::PoseF64;
+use std::fmt::Write;
+use std::string::String;
+
+/// One path to draw.
+pub struct Track<'a> {
+    pub label: &'a str,
+    /// CSS colour.
+    pub color: &'a str,
+    pub dashed: bool,
+    pub poses: &'a [PoseF64],
+}
+
+const MARGIN: f64 = 40.0;
+const LEGEND_ROW: f64 = 18.0;
+/// Length of the heading arrow at the end of a track, px (= mm).
+const ARROW: f64 = 40.0;
+
+/// Renders the arena and the tracks as a standalone SVG document.
+pub fn render(arena: &Arena, tracks: &[Track<'_>], title: &str) -> String {
+    let legend_h = LEGEND_ROW * (tracks.len() as f64 + 1.0);
+    let w = arena.width_y + 2.0 * MARGIN;
+    let h = arena.length_x + 2.0 * MARGIN + legend_h;
+    // (x north, y east) -> (svg x right, svg y down)
+    let px = |p: &PoseF64| (MARGIN + p.y, MARGIN + arena.length_x - p.x);
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w:.0}" height="{h:.0}" viewBox="0 0 {w:.1} {h:.1}" font-family="sans-serif" font-size="12">"#
+    );
+    let _ = writeln!(s, r#"<rect width="100%" height="100%" fill="white"/>"#);
+    let _ = writeln!(
+        s,
+        r##"<rect x="{MARGIN}" y="{MARGIN}" width="{:.1}" height="{:.1}" fill="#f4f1e8" stroke="black" stroke-width="2"/>"##,
+        arena.width_y, arena.length_x
+    );
+    let _ = writeln!(s, r#"<text x="{MARGIN}" y="{:.1}">{}</text>"#, MARGIN - 22.0, escape(title));
+    let _ = writeln!(
+        s,
+        r#"<text x="{MARGIN}" y="{:.1}">N ^  arena {:.1} x {:.1} mm (x north, y east), 1 px = 1 mm</text>"#,
+        MARGIN - 6.0,
+        arena.length_x,
+        arena.width_y
+    );
+    for t in tracks {
+        if t.poses.is_empty() {
+            continue;
+        }
+        let mut pts = String::new();
+        for p in t.poses {
+            let (x, y) = px(p);
+            let _ = write!(pts, "{x:.1},{y:.1} ");
+        }
+        let dash = if t.dashed { r#" stroke-dasharray="6 4""# } else { "" };
+        let _ = writeln!(
+            s,
+            r#"<polyline points="{}" fill="none" stroke="{}" stroke-width="1.5"{dash}/>"#,
+            pts.trim_end(),
+            t.color
+        );
+        for (p, fill) in [(t.poses.first(), "white"), (t.poses.last(), t.color)] {
+            let Some(p) = p else { continue };
+            let (x, y) = px(p);
+            let (sn, cs) = p.theta.sin_cos();
+            let (ax, ay) = px(&PoseF64::new(p.x + ARROW * cs, p.y + ARROW * sn, 0.0));
+            let _ = writeln!(
+                s,
+                r#"<line x1="{x:.1}" y1="{y:.1}" x2="{ax:.1}" y2="{ay:.1}" stroke="{}" stroke-width="2"/><circle cx="{x:.1}" cy="{y:.1}" r="4" fill="{fill}" stroke="{}"/>"#,
+                t.color, t.color
+            );
+        }
+    }
+    let mut ly = MARGIN + arena.length_x + MARGIN * 0.5 + LEGEND_ROW;
+    for t in tracks {
+        let dash = if t.dashed { r#" stroke-dasharray="6 4""# } else { "" };
+        let _ = writeln!(
+            s,
+            r#"<line x1="{MARGIN}" y1="{:.1}" x2="{:.1}" y2="{:.1}" stroke="{}" stroke-width="2"{dash}/><text x="{:.1}" y="{:.1}">{}</text>"#,
+            ly - 4.0,
+            MARGIN + 30.0,
+            ly - 4.0,
+            t.color,
+            MARGIN + 38.0,
+            ly,
+            escape(t.label)
+        );
+        ly += LEGEND_ROW;
+    }
+    let _ = writeln!(
+        s,
+        r#"<text x="{MARGIN}" y="{ly:.1}">open circle: start; filled: end; line: heading</text></svg>"#
+    );
+    s
+}
+
+fn escape(t: &str) -> String {
+    t.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;")
+}
