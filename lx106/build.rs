@@ -20,8 +20,7 @@ fn run(mut cmd: Command) -> String {
 /// every later build); on failure they are the panic message.
 fn libgcc_src(manifest: &Path) -> PathBuf {
     let script = manifest.join("fetch-libgcc-src.sh");
-    let o = Command::new("bash").arg(&script).output()
-        .unwrap_or_else(|e| panic!("bash {}: {e}", script.display()));
+    let o = Command::new("bash").arg(&script).output().unwrap_or_else(|e| panic!("bash {}: {e}", script.display()));
     let msg = String::from_utf8_lossy(&o.stderr);
     if !o.status.success() {
         panic!("GCC libgcc Xtensa sources missing; {} failed:\n{msg}", script.display());
@@ -38,27 +37,41 @@ fn libgcc_src(manifest: &Path) -> PathBuf {
 /// LIB1ASMFUNCS from libgcc/config/xtensa/t-xtensa: the functions that
 /// libgcc assembles from lib1funcs.S, one object each (_mulsi3 ... _rsqrtdf2).
 fn lib1asmfuncs(t_xtensa: &Path) -> Vec<String> {
-    let text = std::fs::read_to_string(t_xtensa)
-        .unwrap_or_else(|e| panic!("{}: {e}", t_xtensa.display()));
+    let text = std::fs::read_to_string(t_xtensa).unwrap_or_else(|e| panic!("{}: {e}", t_xtensa.display()));
     let text = text.replace("\\\n", " ");
-    let funcs: Vec<String> = text.lines()
+    let funcs: Vec<String> = text
+        .lines()
         .filter_map(|l| l.trim().strip_prefix("LIB1ASMFUNCS"))
-        .filter_map(|l| { let l = l.trim_start(); l.strip_prefix('=').or(l.strip_prefix("+=")) })
+        .filter_map(|l| {
+            let l = l.trim_start();
+            l.strip_prefix('=').or(l.strip_prefix("+="))
+        })
         .flat_map(|l| l.split_whitespace().map(String::from))
         .collect();
-    assert!(!funcs.is_empty() && funcs.iter().all(|f| f.starts_with('_')),
-            "no LIB1ASMFUNCS list in {}", t_xtensa.display());
+    assert!(
+        !funcs.is_empty() && funcs.iter().all(|f| f.starts_with('_')),
+        "no LIB1ASMFUNCS list in {}",
+        t_xtensa.display()
+    );
     funcs
 }
 
 /// lx106 core configuration (xtensa-config.h) that Debian's gcc-xtensa-lx106
 /// built its libgcc with; it installs it with the plugin headers.
 fn xtensa_config_dir(gcc: &str) -> PathBuf {
-    let out = run({ let mut c = Command::new(gcc); c.arg("-print-file-name=plugin"); c });
+    let out = run({
+        let mut c = Command::new(gcc);
+        c.arg("-print-file-name=plugin");
+        c
+    });
     let dir = PathBuf::from(out.trim()).join("include");
     let h = dir.join("xtensa-config.h");
-    assert!(h.is_file(), "{} not found (it comes with Debian's gcc-xtensa-lx106): \
-             apt-get install gcc-xtensa-lx106 binutils-xtensa-lx106", h.display());
+    assert!(
+        h.is_file(),
+        "{} not found (it comes with Debian's gcc-xtensa-lx106): \
+             apt-get install gcc-xtensa-lx106 binutils-xtensa-lx106",
+        h.display()
+    );
     println!("cargo:rerun-if-changed={}", h.display());
     dir
 }
@@ -72,9 +85,13 @@ fn build_libgcc1(gcc: &str, ar: &str, src: &Path, config: &Path, out: &Path) -> 
     for f in lib1asmfuncs(&src.join("t-xtensa")) {
         let o = out.join(format!("libgcc{f}.o"));
         let mut cmd = Command::new(gcc);
-        cmd.args(["-g", "-O2", "-mlongcalls", "-I"]).arg(config).arg(format!("-DL{f}"))
-            .args(["-x", "assembler-with-cpp", "-c"]).arg(src.join("lib1funcs.S"))
-            .arg("-o").arg(&o);
+        cmd.args(["-g", "-O2", "-mlongcalls", "-I"])
+            .arg(config)
+            .arg(format!("-DL{f}"))
+            .args(["-x", "assembler-with-cpp", "-c"])
+            .arg(src.join("lib1funcs.S"))
+            .arg("-o")
+            .arg(&o);
         run(cmd);
         objs.push(o);
     }
@@ -88,9 +105,11 @@ fn build_libgcc1(gcc: &str, ar: &str, src: &Path, config: &Path, out: &Path) -> 
 
 fn main() {
     if env::var("CARGO_CFG_TARGET_ARCH").as_deref() != Ok("xtensa") {
-        panic!("paperbot-lx106 builds only for xtensa-esp8266-none-elf: run cargo from the \
+        panic!(
+            "paperbot-lx106 builds only for xtensa-esp8266-none-elf: run cargo from the \
                 project directory so .cargo/config.toml applies (cargo reads config \
-                from the current directory, not from --manifest-path)");
+                from the current directory, not from --manifest-path)"
+        );
     }
     let manifest = PathBuf::from(env::var("CARGO_MANIFEST_DIR").unwrap());
     for f in ["link.x", "asm/start.S", "csrc/step_c.c", "build.rs", "fetch-libgcc-src.sh"] {
@@ -105,11 +124,7 @@ fn main() {
     let gcc_src = libgcc_src(&manifest);
     let xtensa_config = xtensa_config_dir(&gcc);
 
-    cc::Build::new()
-        .compiler(&gcc)
-        .archiver(&ar)
-        .file("asm/start.S")
-        .compile("xtstart");
+    cc::Build::new().compiler(&gcc).archiver(&ar).file("asm/start.S").compile("xtstart");
 
     // picolibc-xtensa-lx106-elf installs under /usr/lib/xtensa-lx106-elf,
     // which Debian's gcc-xtensa-lx106 does not search: give full paths.
@@ -139,8 +154,13 @@ fn main() {
     let objcopy = env::var("XT_OBJCOPY").unwrap_or_else(|_| "xtensa-lx106-elf-objcopy".into());
     let prelinked = out.join("stepc_prelinked.o");
     let mut cmd = Command::new(&ld);
-    cmd.arg("-r").arg("-o").arg(&prelinked).args(&objs)
-        .arg(format!("-L{pico}")).args(["--start-group", "-lm", "-lc"]).arg(&libgcc1)
+    cmd.arg("-r")
+        .arg("-o")
+        .arg(&prelinked)
+        .args(&objs)
+        .arg(format!("-L{pico}"))
+        .args(["--start-group", "-lm", "-lc"])
+        .arg(&libgcc1)
         .arg("--end-group");
     run(cmd);
     // Nothing may be left for the final link to resolve from Rust's
@@ -149,16 +169,15 @@ fn main() {
     let mut cmd = Command::new(&nm);
     cmd.arg("-u").arg(&prelinked);
     let undef = run(cmd);
-    assert!(undef.trim().is_empty(),
-            "C code needs symbols outside picolibc + libgcc lib1funcs:\n{undef}");
+    assert!(undef.trim().is_empty(), "C code needs symbols outside picolibc + libgcc lib1funcs:\n{undef}");
     // Rename the libgcc routines in the pre-linked object, __addsf3 ->
     // __libgcc_addsf3 etc. (definitions and the C code's references alike),
     // so they cannot clash with compiler_builtins' __addsf3, which the Rust
     // code keeps using.  src/main.rs calls a few directly for comparison.
     let mut cmd = Command::new(&nm);
     cmd.args(["-g", "--defined-only", "--format=just-symbols"]).arg(&libgcc1);
-    let map: String = run(cmd).lines().filter(|l| l.starts_with("__"))
-        .map(|l| format!("{l} __libgcc_{}\n", &l[2..])).collect();
+    let map: String =
+        run(cmd).lines().filter(|l| l.starts_with("__")).map(|l| format!("{l} __libgcc_{}\n", &l[2..])).collect();
     let map_file = out.join("libgcc_rename.txt");
     std::fs::write(&map_file, map).unwrap();
     let mut cmd = Command::new(&objcopy);

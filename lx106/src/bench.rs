@@ -13,6 +13,7 @@ use crate::suite::ports::{d_mm, fixed_motion, fixed_pose, CASES, DT_S};
 use crate::vectors::{COMPASS, LIDAR};
 use core::hint::black_box;
 use paperbot::config;
+use paperbot::control::protocol::parse;
 use paperbot::math::{atan2, sin_cos, Angle, Dt, Speed, TurnRate};
 use paperbot::model::compass::MagCounts;
 use paperbot::model::{step, Motion, ServoCmd};
@@ -35,6 +36,8 @@ pub struct StepRow {
     pub fixed: u32,
     pub rust_f32: u32,
     pub c_float: u32,
+    /// The variant of src/proposal.rs (not the core), for the report.
+    pub proposal: u32,
 }
 
 pub fn step_rows() -> [StepRow; 3] {
@@ -57,12 +60,17 @@ pub fn step_rows() -> [StepRow; 3] {
             let d = d_mm();
             count(|| c_step_safe(black_box(&mut p), black_box(kind), black_box(rate), black_box(DT_S), black_box(d)))
         });
-        StepRow { name, fixed, rust_f32, c_float }
+        let proposal = worst(|th| {
+            let mut p = fixed_pose(&PoseF { x: 100.0, y: -50.0, th });
+            let m = fixed_motion(kind, rate);
+            count(|| crate::proposal::step_mut(black_box(&mut p), black_box(m), black_box(dt)))
+        });
+        StepRow { name, fixed, rust_f32, c_float, proposal }
     })
 }
 
 /// Other hot paths of the core: (name, worst count over its inputs).
-pub fn core_benches() -> [(&'static str, u32); 7] {
+pub fn core_benches() -> [(&'static str, u32); 9] {
     let compass = COMPASS
         .iter()
         .map(|v| {
@@ -128,7 +136,15 @@ pub fn core_benches() -> [(&'static str, u32); 7] {
     let mdeg = count(|| {
         black_box(black_box(Angle(0x9abc_def0)).to_signed_millidegrees());
     });
+    let parse_fwd = count(|| {
+        black_box(parse(black_box(b"fwd 0.13 2.5")).is_ok());
+    });
+    let parse_servo = count(|| {
+        black_box(parse(black_box(b"servo 107 61.5 0.8")).is_ok());
+    });
     [
+        ("protocol: parse `fwd 0.13 2.5`", parse_fwd),
+        ("protocol: parse `servo 107 61.5 0.8`", parse_servo),
         ("compass heading from raw counts (ASA, iron, atan2, declination)", compass),
         ("lidar reading to distance (front)", lidar),
         ("sin_cos", sincos),
@@ -146,16 +162,19 @@ pub fn run() -> (u32, u32) {
     println!();
     println!("## State update, one step (instructions, worst of {} headings, dt = 10 ms)", HEADINGS.len());
     println!();
-    println!("| motion | fixed point (paperbot::model::step) | Rust f32 (libm, soft-float) | C float (gcc -O2, libgcc) | C / fixed |");
-    println!("| --- | ---: | ---: | ---: | ---: |");
+    println!(
+        "| motion | fixed point (paperbot::model::step) | Rust f32 (libm, soft-float) | C float (gcc -O2, libgcc) | C / fixed | proposal (src/proposal.rs, not the core) |"
+    );
+    println!("| --- | ---: | ---: | ---: | ---: | ---: |");
     for r in &rows {
         println!(
-            "| {} | {} | {} | {} | {:.1}x |",
+            "| {} | {} | {} | {} | {:.1}x | {} |",
             r.name,
             r.fixed,
             r.rust_f32,
             r.c_float,
-            r.c_float as f32 / r.fixed.max(1) as f32
+            r.c_float as f32 / r.fixed.max(1) as f32,
+            r.proposal
         );
     }
     let others = core_benches();
@@ -172,6 +191,7 @@ pub fn run() -> (u32, u32) {
         println!("BENCH step_{}_fixed {}", r.name, r.fixed);
         println!("BENCH step_{}_rust_f32 {}", r.name, r.rust_f32);
         println!("BENCH step_{}_c_float {}", r.name, r.c_float);
+        println!("BENCH step_{}_proposal {}", r.name, r.proposal);
     }
     for (name, n) in &others {
         println!("BENCH {} {}", name, n);

@@ -10,6 +10,7 @@
 
 mod bench;
 mod float;
+mod proposal;
 mod rt;
 mod suite;
 #[rustfmt::skip]

@@ -582,7 +582,7 @@ pub const ACTUATOR_INVERSE: &[InverseVec] = &[
     InverseVec { request: Mv::Straight(-3865471), left_q8: 15078, right_q8: 28416, saturated: true },
     InverseVec { request: Mv::Turn(111995335), left_q8: 25964, right_q8: 28520, saturated: false },
     InverseVec { request: Mv::Turn(851164544), left_q8: 28341, right_q8: 29952, saturated: true },
-    InverseVec { request: Mv::Turn(-98555895), left_q8: 17660, right_q8: 17920, saturated: true },
+    InverseVec { request: Mv::Turn(-116475148), left_q8: 16964, right_q8: 16081, saturated: false },
     InverseVec { request: Mv::Turn(-4479813), left_q8: 17660, right_q8: 17920, saturated: true },
     InverseVec { request: Mv::Stop, left_q8: 23040, right_q8: 23040, saturated: false },
 ];

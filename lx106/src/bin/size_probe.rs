@@ -23,6 +23,7 @@ pub extern "C" fn rust_main() -> i32 {
     bb(sin_cos(bb(Angle::ZERO)));
     bb(atan2(bb(0), bb(0)));
     bb(bb(Angle::ZERO).to_signed_millidegrees());
+    bb(paperbot::control::protocol::parse(bb(b"fwd 0.13 2.5")).is_ok());
     0
 }
 

@@ -53,7 +53,10 @@ fn inverse_model() -> TestResult {
     let mut worst = 0;
     for v in ACTUATOR_INVERSE {
         let d = MODEL.drive(black_box(motion(v.request)));
-        let (el, er) = ((i32::from(d.left.to_q8()) - i32::from(v.left_q8)).abs(), (i32::from(d.right.to_q8()) - i32::from(v.right_q8)).abs());
+        let (el, er) = (
+            (i32::from(d.left.to_q8()) - i32::from(v.left_q8)).abs(),
+            (i32::from(d.right.to_q8()) - i32::from(v.right_q8)).abs(),
+        );
         worst = worst.max(el).max(er);
         let kind_ok = d.motion.kind() == motion(v.request).kind();
         // 3/256 of a command step
@@ -81,7 +84,11 @@ fn stop_is_neutral() -> TestResult {
     check(d.motion == Motion::Stop && !d.saturated, "stop reports motion")?;
     check(MODEL.stop() == d, "stop() differs from drive(Stop)")?;
     check(MODEL.motion_from_commands(ServoCmd::NEUTRAL, ServoCmd::NEUTRAL) == Motion::Stop, "90/90 moves")?;
-    check(MODEL.motion_from_commands(black_box(ServoCmd::from_int(110)), ServoCmd::from_int(110)).kind() == MotionKind::Cw, "110/110 is not clockwise")
+    check(
+        MODEL.motion_from_commands(black_box(ServoCmd::from_int(110)), ServoCmd::from_int(110)).kind()
+            == MotionKind::Cw,
+        "110/110 is not clockwise",
+    )
 }
 
 fn round_trip() -> TestResult {

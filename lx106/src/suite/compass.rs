@@ -23,10 +23,20 @@ fn heading_from_raw() -> TestResult {
         let e = got.diff(Angle(v.heading)).abs();
         worst = worst.max(e);
         if e > TOL {
-            m.fail(format_args!("{:?} asa {:?}: {} mdeg, f64 {} mdeg", v.raw, v.asa, got.to_millidegrees(), Angle(v.heading).to_millidegrees()));
+            m.fail(format_args!(
+                "{:?} asa {:?}: {} mdeg, f64 {} mdeg",
+                v.raw,
+                v.asa,
+                got.to_millidegrees(),
+                Angle(v.heading).to_millidegrees()
+            ));
         }
     }
-    println!("      {} headings round the circle, worst error {:.3} deg (bound 0.5)", COMPASS.len(), worst as f32 * (360.0 / 4294967296.0));
+    println!(
+        "      {} headings round the circle, worst error {:.3} deg (bound 0.5)",
+        COMPASS.len(),
+        worst as f32 * (360.0 / 4294967296.0)
+    );
     m.result("heading differs from the f64 compass model")
 }
 

@@ -134,7 +134,12 @@ fn sin_cos_vs_f64() -> TestResult {
             m.fail(format_args!("angle {:#010x}: ({s}, {c}), f64 ({}, {})", v.angle, v.sin, v.cos));
         }
     }
-    println!("      {} angles, worst error {} LSB of Q30 = {:.2e} (bound 2e-7)", SIN_COS.len(), worst, worst as f32 / 1073741824.0);
+    println!(
+        "      {} angles, worst error {} LSB of Q30 = {:.2e} (bound 2e-7)",
+        SIN_COS.len(),
+        worst,
+        worst as f32 / 1073741824.0
+    );
     m.result("sin_cos error above 2e-7")
 }
 
@@ -151,6 +156,11 @@ fn atan2_vs_f64() -> TestResult {
             m.fail(format_args!("atan2({}, {}) = {:#010x}, f64 {:#010x}", v.y, v.x, got.0, v.angle));
         }
     }
-    println!("      {} points, worst error {} angle LSB = {:.2e} rad (bound 2e-7)", ATAN2.len(), worst, worst as f32 * 1.4629181e-9);
+    println!(
+        "      {} points, worst error {} angle LSB = {:.2e} rad (bound 2e-7)",
+        ATAN2.len(),
+        worst,
+        worst as f32 * 1.4629181e-9
+    );
     m.result("atan2 error above 2e-7 rad")
 }

@@ -11,6 +11,7 @@ mod counter;
 mod lidar;
 mod math;
 pub mod ports;
+mod protocol;
 mod state;
 
 /// A test fails with a short reason; details are printed before returning.
@@ -26,6 +27,7 @@ pub const GROUPS: &[(&str, &[Test])] = &[
     ("compass", compass::TESTS),
     ("state", state::TESTS),
     ("ports", ports::TESTS),
+    ("protocol", protocol::TESTS),
 ];
 
 pub fn check(cond: bool, msg: &'static str) -> TestResult {

@@ -25,11 +25,7 @@ pub fn fixed_motion(kind: i32, rate: f32) -> Motion {
 }
 
 pub fn fixed_pose(p: &PoseF) -> Pose {
-    Pose::new(
-        Coord::from_mm_f64(p.x as f64),
-        Coord::from_mm_f64(p.y as f64),
-        Angle::from_radians_f64(p.th as f64),
-    )
+    Pose::new(Coord::from_mm_f64(p.x as f64), Coord::from_mm_f64(p.y as f64), Angle::from_radians_f64(p.th as f64))
 }
 
 pub fn d_mm() -> f32 {
@@ -41,7 +37,7 @@ fn f32_and_c_match_fixed() -> TestResult {
     let mut worst = 0.0f32;
     for (name, kind, rate) in CASES {
         for k in 0..12 {
-            let p0 = PoseF { x: 100.0, y: -50.0, th: k as f32 * 0.5236 - 3.0 };
+            let p0 = PoseF { x: 100.0, y: -50.0, th: k as f32 * 0.5 - 3.0 };
             let (mut pf, mut pc) = (p0, p0);
             f32_step(&mut pf, black_box(kind), rate, DT_S, d_mm());
             c_step_safe(&mut pc, black_box(kind), rate, DT_S, d_mm());
@@ -51,7 +47,10 @@ fn f32_and_c_match_fixed() -> TestResult {
             let e = (pf.x - qx).abs().max((pf.y - qy).abs()).max((pc.x - qx).abs()).max((pc.y - qy).abs());
             worst = worst.max(e);
             if e > 1e-4 || (pf.th - pc.th).abs() > 1e-6 {
-                m.fail(format_args!("{name} th {}: fixed ({qx}, {qy}) f32 ({}, {}) C ({}, {})", p0.th, pf.x, pf.y, pc.x, pc.y));
+                m.fail(format_args!(
+                    "{name} th {}: fixed ({qx}, {qy}) f32 ({}, {}) C ({}, {})",
+                    p0.th, pf.x, pf.y, pc.x, pc.y
+                ));
             }
         }
     }

@@ -12,6 +12,7 @@ pub const TESTS: &[Test] = &[
     ("step_vectors", step_vectors),
     ("step_sequences_no_drift", step_sequences),
     ("zero_dt_moves_nothing", zero_dt),
+    ("proposal_matches_vectors", proposal_matches_vectors),
 ];
 
 /// One step's position error bound: sin/cos 2e-7 times D = 56 mm (twice for
@@ -32,6 +33,15 @@ fn dt(us: u16) -> Dt {
 }
 
 fn step_vectors() -> TestResult {
+    vectors_with(step, "")
+}
+
+/// The benchmark-only variant in `src/proposal.rs` passes the same vectors.
+fn proposal_matches_vectors() -> TestResult {
+    vectors_with(crate::proposal::step, "(proposal) ")
+}
+
+fn vectors_with(step: fn(&Pose, Motion, Dt) -> Pose, who: &str) -> TestResult {
     let mut m = Mismatches::new();
     let mut worst = 0i64;
     for (i, v) in STEP.iter().enumerate() {
@@ -52,7 +62,8 @@ fn step_vectors() -> TestResult {
         }
     }
     println!(
-        "      {} steps (stop, straight, turn; every quadrant, dt 1 us..65.5 ms): heading exact, worst position error {:.2e} mm (bound 3e-5)",
+        "      {}{} steps (stop, straight, turn; every quadrant, dt 1 us..65.5 ms): heading exact, worst position error {:.2e} mm (bound 3e-5)",
+        who,
         STEP.len(),
         worst as f32 / 4294967296.0
     );

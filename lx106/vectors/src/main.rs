@@ -23,6 +23,9 @@ const SPEED_PER_MM_S: f64 = TWO_32 / 1e6;
 /// TurnRate units (2^-16 angle LSB / us) per rad/s.
 const RATE_PER_RAD_S: f64 = TWO_32 / TAU / 1e6 * 65536.0;
 
+/// (motion, dt in us, steps)
+type Seg = (Mv, u16, u16);
+
 #[derive(Clone, Copy)]
 enum Mv {
     Stop,
@@ -76,11 +79,7 @@ impl RefPose {
                 let wt = i128::from(bits) * i128::from(dt_us);
                 let th48 = ((i128::from(self.th48) + wt).rem_euclid(1 << 48)) as u64 & MASK48;
                 let th1 = RefPose { th48, ..self }.theta_rad();
-                RefPose {
-                    x: self.x - d_mm * (th.cos() - th1.cos()),
-                    y: self.y + d_mm * (th.sin() - th1.sin()),
-                    th48,
-                }
+                RefPose { x: self.x - d_mm * (th.cos() - th1.cos()), y: self.y + d_mm * (th.sin() - th1.sin()), th48 }
             }
         }
     }
@@ -164,14 +163,14 @@ fn generate() -> String {
     let rps = |w: f64| (w * RATE_PER_RAD_S).round() as i32;
     let motions = [
         Mv::Stop,
-        Mv::Straight(mps(0.149)),   // fastest forward of the lab's runs
-        Mv::Straight(mps(-0.123)),  // backward
-        Mv::Straight(4_294_967),    // Speed::MAX (1 m/s)
-        Mv::Straight(1),            // one LSB
-        Mv::Turn(rps(3.20)),        // fastest cw of the lab's runs
-        Mv::Turn(rps(-2.17)),       // ccw
-        Mv::Turn(rps(20.0)),        // TurnRate::MAX
-        Mv::Turn(-1),               // one LSB ccw: exercises the fraction borrow
+        Mv::Straight(mps(0.149)),  // fastest forward of the lab's runs
+        Mv::Straight(mps(-0.123)), // backward
+        Mv::Straight(4_294_967),   // Speed::MAX (1 m/s)
+        Mv::Straight(1),           // one LSB
+        Mv::Turn(rps(3.20)),       // fastest cw of the lab's runs
+        Mv::Turn(rps(-2.17)),      // ccw
+        Mv::Turn(rps(20.0)),       // TurnRate::MAX
+        Mv::Turn(-1),              // one LSB ccw: exercises the fraction borrow
     ];
     let mut rng = Rng(0x2545_f491);
     let mut poses: Vec<(i64, i64, u32, u16)> = vec![
@@ -179,8 +178,8 @@ fn generate() -> String {
         (100 << 32, -(250 << 32), deg(90.0), 0),
         (-(762 << 32), 495 << 32, deg(180.0), 0xFFFF),
         (12_345_678_901, -98_765_432_109, deg(270.0), 0x8000),
-        (0, 0, u32::MAX, 0xFFFF),                    // just below a full turn: wraps
-        (0, 0, (5 << 22) + (1 << 21), 0),            // on a sin-table rounding boundary
+        (0, 0, u32::MAX, 0xFFFF),         // just below a full turn: wraps
+        (0, 0, (5 << 22) + (1 << 21), 0), // on a sin-table rounding boundary
         (0, 0, (5 << 22) + (1 << 21) - 1, 0),
         (1 << 40, 1 << 40, deg(45.0), 1),
     ];
@@ -215,7 +214,7 @@ fn generate() -> String {
     let _ = n;
 
     // ----------------------------------------------------------- sequences
-    let seqs: Vec<(&str, Vec<(Mv, u16, u16)>)> = vec![
+    let seqs: Vec<(&str, Vec<Seg>)> = vec![
         // 10 s of straight driving at 10 ms steps
         ("straight_10s", vec![(Mv::Straight(mps(0.14)), 10_000, 1000)]),
         // a full turn and more in place (3 rad/s, 10 s)
@@ -223,9 +222,7 @@ fn generate() -> String {
         // a square: forward 2 s, quarter turn cw, four times (quarter turn = pi/2 / 3 rad/s)
         (
             "square",
-            (0..4)
-                .flat_map(|_| [(Mv::Straight(mps(0.14)), 10_000, 200), (Mv::Turn(rps(3.0)), 10_000, 52)])
-                .collect(),
+            (0..4).flat_map(|_| [(Mv::Straight(mps(0.14)), 10_000, 200), (Mv::Turn(rps(3.0)), 10_000, 52)]).collect(),
         ),
         // mixed: backward, ccw, stop, forward with irregular dt
         (
@@ -386,13 +383,8 @@ fn generate() -> String {
                 2 => Mv::Turn((y * RATE_PER_RAD_S).round() as i32),
                 _ => Mv::Turn(-(y * RATE_PER_RAD_S).round() as i32),
             };
-            let _ = writeln!(
-                o,
-                "    ForwardVec {{ left_q8: {}, right_q8: {}, expect: {} }},",
-                q8(cl),
-                q8(cr),
-                mv.src()
-            );
+            let _ =
+                writeln!(o, "    ForwardVec {{ left_q8: {}, right_q8: {}, expect: {} }},", q8(cl), q8(cr), mv.src());
         }
     }
     // both at neutral, one wheel at neutral: no modelled motion
@@ -431,7 +423,12 @@ fn generate() -> String {
             q8(inv(&lines.right))
         );
     }
-    let _ = writeln!(o, "    InverseVec {{ request: Mv::Stop, left_q8: {}, right_q8: {}, saturated: false }},", q8(90.0), q8(90.0));
+    let _ = writeln!(
+        o,
+        "    InverseVec {{ request: Mv::Stop, left_q8: {}, right_q8: {}, saturated: false }},",
+        q8(90.0),
+        q8(90.0)
+    );
     o.push_str("];\n");
     o
 }

@@ -1,0 +1,107 @@
+#!/usr/bin/env bash
+# Builds and runs the paperbot core's on-target tests and benchmarks on the
+# ESP8266's Xtensa lx106 ISA under qemu-system-xtensa -M sim -cpu lx106.
+#
+#   bash lx106/run.sh            # from anywhere; exit status 0 only if all pass
+#
+# Steps: (1) the test vectors (lx106/src/vectors.rs) are up to date with
+# their host-side f64 generator; (2) GCC's libgcc Xtensa soft-float sources
+# are in the cache (fetched from Debian's gcc-12-source on first use, see
+# fetch-libgcc-src.sh); (3) release build of the suite and the size probes;
+# (4) the suite under QEMU, twice: identical instruction counts, ends with
+# "N passed, N failed"; (5) the core's .text and static RAM from the size
+# probes, with the bar; (6) no soft-float routine in the core's paths.
+#
+# Needs: rustup nightly with rust-src, stable (host generator), apt packages
+# qemu-system-misc gcc-xtensa-lx106 binutils-xtensa-lx106
+# picolibc-xtensa-lx106-elf xz-utils.
+set -euo pipefail
+here="$(cd "$(dirname "$0")" && pwd)"
+root="$(dirname "$here")"
+export QEMU_TIMEOUT="${QEMU_TIMEOUT:-120}"
+
+# The core's code (.text + literals, and the runtime helpers it pulls in)
+# must stay under this many bytes.
+TEXT_MAX=$((24 * 1024))
+
+need() { command -v "$1" >/dev/null || { echo "run.sh: missing $1 ($2)" >&2; exit 2; }; }
+need cargo "rustup: https://rustup.rs"
+need qemu-system-xtensa "apt-get install qemu-system-misc"
+need xtensa-lx106-elf-gcc "apt-get install gcc-xtensa-lx106 binutils-xtensa-lx106"
+[[ -f /usr/lib/xtensa-lx106-elf/picolibc.specs ]] ||
+  { echo "run.sh: apt-get install picolibc-xtensa-lx106-elf" >&2; exit 2; }
+
+fail=0
+
+echo "== 1. test vectors: lx106/src/vectors.rs from the f64 generator (lx106/vectors)"
+# run from the repository root: the host target, not lx106/.cargo/config.toml's
+(cd "$root" && cargo run -q --manifest-path lx106/vectors/Cargo.toml --target-dir lx106/target/vectors -- --check) ||
+  { echo "run.sh: FAILED: stale test vectors" >&2; exit 1; }
+
+cd "$here"
+echo "== 2. GCC libgcc Xtensa sources (./fetch-libgcc-src.sh; build.rs runs it too)"
+LIBGCC_SRC=$(./fetch-libgcc-src.sh) || exit 2
+echo "   $LIBGCC_SRC: $(sed -n 's/^from: //p' "$LIBGCC_SRC/SOURCE")"
+
+echo "== 3. build (cargo +nightly build --release)"
+cargo +nightly build --release 2>&1 | grep -vE '^warning: profile package spec `compiler_builtins`' | tail -3
+OUT=target/xtensa-esp8266-none-elf/release
+ELF=$OUT/paperbot-lx106
+xtensa-lx106-elf-size "$ELF" "$OUT/size-probe" "$OUT/size-base"
+
+echo "== 4. suite + benchmarks under qemu-system-xtensa -M sim -cpu lx106 (twice)"
+LOG=target/runlogs
+mkdir -p "$LOG"
+run() { # $1 = log name
+  local rc=0
+  ./qemu-run.sh "$ELF" > "$LOG/$1.txt" 2> "$LOG/$1.err" || rc=$?
+  return $rc
+}
+rc=0; run run1 || rc=$?
+cat "$LOG/run1.txt"
+echo "   [exit status $rc]"
+(( rc == 0 )) || fail=1
+tail -1 "$LOG/run1.txt" | grep -qE '^[0-9]+ passed, 0 failed$' || { echo "   last line is not 'N passed, 0 failed'"; fail=1; }
+run run2 || true
+if diff <(grep '^BENCH' "$LOG/run1.txt") <(grep '^BENCH' "$LOG/run2.txt") >/dev/null; then
+  echo "   instruction counts identical in a second run"
+else
+  echo "   instruction counts DIFFER between two runs"; fail=1
+fi
+
+echo "== 5. core footprint: size-probe (the core's robot-side entry points) minus size-base"
+sec() { # $1 = ELF, $2 = section: its size in bytes (0 if absent)
+  xtensa-lx106-elf-size -A "$1" | awk -v s="$2" '$1 == s { print $2; f = 1 } END { if (!f) print 0 }'
+}
+d() { echo $(( $(sec "$OUT/size-probe" "$1") - $(sec "$OUT/size-base" "$1") )); }
+text=$(d .text); rodata=$(d .rodata); data=$(d .data); bss=$(d .bss)
+echo "   .text (code + literals, incl. runtime helpers it calls): $text bytes"
+echo "   .rodata (tables, constants; flash on the robot):          $rodata bytes"
+echo "   static RAM .data + .bss:                                  $((data + bss)) bytes"
+echo "   runtime helpers linked for the core (compiler_builtins):"
+xtensa-lx106-elf-nm -S "$OUT/size-probe" | awk '$3 ~ /^[tTwW]$/ && $4 ~ /^__/ { printf "     %-12s 0x%s bytes\n", $4, $2 }' | sort -u
+# Informational: core::panicking entry points linked from the core's paths
+# (signed `/` keeps an overflow check even in release; see BENCHMARKS.md).
+np=$(xtensa-lx106-elf-objdump -d "$OUT/size-probe" | grep -cE 'l32r.*<[^>]*core9panicking' || true)
+echo "   references to core::panicking from the core's paths: $np"
+if (( text < TEXT_MAX )); then
+  echo "test bar::core_text: $text < $TEXT_MAX bytes ... ok"
+else
+  echo "test bar::core_text: $text < $TEXT_MAX bytes ... FAILED"; fail=1
+fi
+
+echo "== 6. no soft-float in the core's paths (size-probe links every one of them)"
+# float routines of libgcc/compiler_builtins: add/sub/mul/div/neg/compare/
+# conversions on sf (f32), df (f64), tf; and libm entry points
+sf=$(xtensa-lx106-elf-nm "$OUT/size-probe" |
+     awk '{ print $NF }' |
+     grep -E '^__(add|sub|mul|div|neg|cmp|eq|ne|lt|le|gt|ge|unord|fix|fixuns|float|floatun|extend|trunc|pow)[sdt]f|^(sinf?|cosf?|atan2f?|sqrtf?)$' || true)
+if [[ -z $sf ]]; then
+  echo "test bar::core_no_soft_float ... ok"
+else
+  echo "   soft-float symbols: $sf"
+  echo "test bar::core_no_soft_float ... FAILED"; fail=1
+fi
+
+if (( fail )); then echo "run.sh: FAILED"; exit 1; fi
+echo "run.sh: OK"
