@@ -4,8 +4,9 @@
 //!
 //! Bounded buffers only (`heapless`), no allocation, and integer code only:
 //! numbers are parsed into fixed point and written back as decimals by
-//! [`number`], so `core::fmt`'s float code never reaches the robot (this
-//! module's sources contain no float type; a test checks).
+//! [`number`], so the standard formatting machinery and its float code never
+//! reach the robot (this module's sources name no float type and no
+//! formatting macro; a test checks).
 //!
 //! # Command grammar
 //!

@@ -22,19 +22,37 @@ pub enum Command {
     /// `fwd`/`back` (speed in m/s) or `cw`/`ccw` (turn rate in rad/s),
     /// for `duration_ms` or, without one, until the next command or the
     /// deadman. `motion` is never [`Motion::Stop`] and never zero.
-    Drive { motion: Motion, duration_ms: Option<u32> },
+    Drive {
+        motion: Motion,
+        duration_ms: Option<u32>,
+    },
     /// Both servos to neutral (90 plus trim).
     Stop,
     /// Raw servo commands (0..180, 90 = stop, trims not applied).
-    Servo { left: ServoCmd, right: ServoCmd, duration_ms: Option<u32> },
+    Servo {
+        left: ServoCmd,
+        right: ServoCmd,
+        duration_ms: Option<u32>,
+    },
     /// Sets one servo's trim (in command steps, moves its neutral).
-    Trim { side: Side, trim: Trim },
+    Trim {
+        side: Side,
+        trim: Trim,
+    },
     /// Sets the pose estimate (`reset` is `pose 0 0 0`).
-    SetPose { x_mm: i32, y_mm: i32, heading: Angle },
+    SetPose {
+        x_mm: i32,
+        y_mm: i32,
+        heading: Angle,
+    },
     /// Starts a magnetometer calibration sweep of `samples` samples.
-    Calibrate { samples: u16 },
+    Calibrate {
+        samples: u16,
+    },
     /// Telemetry rows per second, 0 = off.
-    Rate { hz: u16 },
+    Rate {
+        hz: u16,
+    },
     Status,
     Help,
 }

@@ -1,7 +1,7 @@
 //! Decimal numbers in fixed point, with integer code only: parsing a token
 //! like `-0.130` into a scaled integer, and writing a scaled integer back as
-//! a decimal. No `core::fmt` (whose float code would otherwise reach the
-//! robot), no 64-bit multiply or divide: every value is a `u32` magnitude.
+//! a decimal. No formatting machinery (whose float code would otherwise
+//! reach the robot), no 64-bit multiply or divide: every value is a `u32` magnitude.
 
 use heapless::String;
 
@@ -21,6 +21,15 @@ pub enum NumError {
 /// zeros (`0.1300` is `0.130`, `0.1305` is [`NumError::Bad`]): the value is
 /// exact or refused, never rounded.
 pub fn parse_fixed(token: &[u8], decimals: u32) -> Result<i32, NumError> {
+    let (negative, mag) = parse_fixed_parts(token, decimals)?;
+    // i64 only for the sign: -2^31 is an i32, +2^31 is not
+    let v = if negative { -i64::from(mag) } else { i64::from(mag) };
+    i32::try_from(v).map_err(|_| NumError::Range)
+}
+
+/// [`parse_fixed`] as (sign, magnitude): the sign as written (`-0` is
+/// negative), the magnitude `value * 10^decimals` up to `u32::MAX`.
+pub fn parse_fixed_parts(token: &[u8], decimals: u32) -> Result<(bool, u32), NumError> {
     let (negative, body) = match token.split_first() {
         Some((b'-', rest)) => (true, rest),
         Some((b'+', rest)) => (false, rest),
@@ -59,9 +68,7 @@ pub fn parse_fixed(token: &[u8], decimals: u32) -> Result<i32, NumError> {
         push_digit(b'0')?;
         taken += 1;
     }
-    let mag = i32::try_from(mag).map_err(|_| NumError::Range)?;
-    // |mag| <= i32::MAX, so the negation cannot overflow
-    Ok(if negative { -mag } else { mag })
+    Ok((negative, mag))
 }
 
 /// Appends `s`.

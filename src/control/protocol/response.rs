@@ -136,7 +136,8 @@ pub fn format_status<const N: usize>(s: &Status, out: &mut String<N>) -> Result<
     }
     push_str(out, " faults=")?;
     let f = &s.faults;
-    for (i, count) in [f.bus, f.timeout, f.missing, f.bad_sample, f.rejected_outliers, f.overruns].into_iter().enumerate()
+    for (i, count) in
+        [f.bus, f.timeout, f.missing, f.bad_sample, f.rejected_outliers, f.overruns].into_iter().enumerate()
     {
         if i > 0 {
             push_str(out, "/")?;

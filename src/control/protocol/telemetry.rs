@@ -4,7 +4,7 @@
 
 use heapless::String;
 
-use super::number::{push_fixed, push_str, push_u32};
+use super::number::{push_fixed, push_fixed_parts, push_str, push_u32};
 use super::Overflow;
 use crate::driver::{CompassSample, LidarSample};
 use crate::math::Length;
@@ -170,7 +170,7 @@ pub fn format_row<const N: usize>(r: &TelemetryRow, out: &mut String<N>) -> Resu
     sep(out)?;
     push_fixed(out, r.y_dmm, 1)?;
     sep(out)?;
-    push_fixed(out, r.heading_mdeg.min(i32::MAX as u32) as i32, 3)?;
+    push_fixed_parts(out, false, r.heading_mdeg, 3)?;
     sep(out)?;
     push_str(out, motion_word(r.motion))?;
     sep(out)?;
@@ -178,9 +178,9 @@ pub fn format_row<const N: usize>(r: &TelemetryRow, out: &mut String<N>) -> Resu
     sep(out)?;
     push_fixed(out, r.w_mrad_s, 3)?;
     sep(out)?;
-    push_fixed(out, r.left_cmd_centi.min(i32::MAX as u32) as i32, 2)?;
+    push_fixed_parts(out, false, r.left_cmd_centi, 2)?;
     sep(out)?;
-    push_fixed(out, r.right_cmd_centi.min(i32::MAX as u32) as i32, 2)?;
+    push_fixed_parts(out, false, r.right_cmd_centi, 2)?;
     opt(out, r.front_raw_mm.map(i32::from), 0)?;
     opt(out, r.front_dmm, 1)?;
     opt(out, r.right_raw_mm.map(i32::from), 0)?;
@@ -191,7 +191,10 @@ pub fn format_row<const N: usize>(r: &TelemetryRow, out: &mut String<N>) -> Resu
     for i in 0..3 {
         opt(out, r.mag_field.and_then(|m| m.get(i).copied()), 0)?;
     }
-    opt(out, r.compass_mdeg.map(|d| d.min(i32::MAX as u32) as i32), 3)?;
+    sep(out)?;
+    if let Some(mdeg) = r.compass_mdeg {
+        push_fixed_parts(out, false, mdeg, 3)?;
+    }
     let f = &r.faults;
     for count in [f.bus, f.timeout, f.missing, f.bad_sample, f.rejected_outliers, f.overruns] {
         sep(out)?;
@@ -228,7 +231,7 @@ pub use row_parser::{parse_telemetry_row, RowError};
 
 #[cfg(feature = "std")]
 mod row_parser {
-    use super::super::number::parse_fixed;
+    use super::super::number::{parse_fixed, parse_fixed_parts};
     use super::{FaultCounters, TelemetryRow, COLUMNS, HEADER};
     use crate::model::MotionKind;
 
@@ -267,14 +270,9 @@ mod row_parser {
             }
         };
         let unsigned = |i: usize, decimals: u32| -> Result<u32, RowError> {
-            let s = get(i);
-            if s.starts_with(['-', '+']) {
-                return Err(err(i));
-            }
-            if decimals == 0 {
-                s.parse::<u32>().map_err(|_| err(i))
-            } else {
-                num(i, decimals).and_then(|v| u32::try_from(v).map_err(|_| err(i)))
+            match parse_fixed_parts(get(i).as_bytes(), decimals) {
+                Ok((false, v)) => Ok(v),
+                _ => Err(err(i)),
             }
         };
         let conv = |i: usize, v: Option<i32>| -> Result<Option<u16>, RowError> {
@@ -287,27 +285,20 @@ mod row_parser {
                 _ => Err(err(first)),
             }
         };
-        let motion = match get(4) {
-            "stop" => MotionKind::Stop,
-            "fwd" => MotionKind::Forward,
-            "back" => MotionKind::Backward,
-            "cw" => MotionKind::Cw,
-            "ccw" => MotionKind::Ccw,
-            _ => return Err(err(4)),
-        };
-        let mag_raw = match group(13)? {
-            None => None,
-            Some(m) => {
-                let axis = |k: usize| i16::try_from(m.get(k).copied().unwrap_or(0)).map_err(|_| err(13 + k));
-                Some([axis(0)?, axis(1)?, axis(2)?])
-            }
-        };
+        // columns in order, so the first bad one is reported
         Ok(TelemetryRow {
             t_ms: unsigned(0, 0)?,
             x_dmm: num(1, 1)?,
             y_dmm: num(2, 1)?,
             heading_mdeg: unsigned(3, 3)?,
-            motion,
+            motion: match get(4) {
+                "stop" => MotionKind::Stop,
+                "fwd" => MotionKind::Forward,
+                "back" => MotionKind::Backward,
+                "cw" => MotionKind::Cw,
+                "ccw" => MotionKind::Ccw,
+                _ => return Err(err(4)),
+            },
             v_mm_s: num(5, 3)?,
             w_mrad_s: num(6, 3)?,
             left_cmd_centi: unsigned(7, 2)?,
@@ -316,9 +307,15 @@ mod row_parser {
             front_dmm: opt(10, 1)?,
             right_raw_mm: conv(11, opt(11, 0)?)?,
             right_dmm: opt(12, 1)?,
-            mag_raw,
+            mag_raw: match group(13)? {
+                None => None,
+                Some(m) => {
+                    let axis = |k: usize| i16::try_from(m.get(k).copied().unwrap_or(0)).map_err(|_| err(13 + k));
+                    Some([axis(0)?, axis(1)?, axis(2)?])
+                }
+            },
             mag_field: group(16)?,
-            compass_mdeg: opt(19, 3)?.map(|v| u32::try_from(v).map_err(|_| err(19))).transpose()?,
+            compass_mdeg: if get(19).is_empty() { None } else { Some(unsigned(19, 3)?) },
             faults: FaultCounters {
                 bus: unsigned(20, 0)?,
                 timeout: unsigned(21, 0)?,
