@@ -171,6 +171,14 @@ pub mod compass {
     /// the AK8963's noise (a few counts), so a robot standing still visits
     /// no sectors.
     pub const CALIBRATION_MIN_RADIUS: i32 = 50;
+    /// Turn rate of the calibration sweep (clockwise), mrad/s: inside the
+    /// clockwise lines' common measured range (about 2.2..3.2 rad/s, data
+    /// `servo_runs.csv`), so one turn takes 2.5 s, 250 samples at 100 Hz.
+    pub const CALIBRATION_TURN_MRAD_S: i32 = 2_500;
+    /// A sweep that has not collected its samples after this long per
+    /// sample is abandoned (and the robot stops), ms: twice the AK8963's
+    /// 10 ms period in continuous mode 2.
+    pub const CALIBRATION_MS_PER_SAMPLE: u32 = 20;
 
     /// Wait after the MPU9250's device reset (PWR_MGMT_1 H_RESET), us: the
     /// register start-up time is 100 ms (MPU-9250 datasheet, table 6.2;

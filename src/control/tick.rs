@@ -24,9 +24,12 @@
 //! Deadman: an untimed `fwd`/`back`/`cw`/`ccw`/`servo` runs until the next
 //! command or until no valid command came for `DEADMAN_MS`. A timed one runs
 //! for its duration (at most `config::serial::MAX_DURATION_MS`) and is its
-//! own deadman. A calibration sweep stops when it has its samples or after
-//! [`config::compass::CALIBRATION_TIMEOUT_MS`]. Any valid command refreshes
-//! the deadman; a malformed line gets one `# err` line and changes nothing.
+//! own deadman. A calibration sweep (`cal`) turns in place clockwise while
+//! the magnetometer samples feed a [`MagCalibrator`]; it stops when it has
+//! its samples (the new calibration is applied and printed as the config
+//! line to paste) or after [`config::compass::CALIBRATION_MS_PER_SAMPLE`]
+//! per sample. Any valid command refreshes the deadman (and ends a sweep);
+//! a malformed line gets one `# err` line and changes nothing.
 //!
 //! No allocation, no panics: every buffer is a bounded `heapless` one, every
 //! clock difference is wrapping or saturating, every index is checked.
@@ -35,11 +38,13 @@ use heapless::String;
 
 use crate::config;
 use crate::control::protocol::{
-    format_response, format_status, format_telemetry, telemetry_header, Command, FaultCounters, LineBuffer,
-    ParseError, Response, Side, Status, Telemetry, HELP, MAX_OUT_LINE,
+    format_response, format_status, format_telemetry, telemetry_header, Command, FaultCounters, LineBuffer, ParseError,
+    Response, Side, Status, Telemetry, HELP, MAX_OUT_LINE,
 };
-use crate::driver::{CompassSample, HeadingSensor, LidarSample, SensorError, Servos};
-use crate::math::{Coord, Dt, Length};
+use crate::driver::calibration::{CalStatus, CalibrationError, ConfigLine, MagCalibrator};
+use crate::driver::{CompassSample, HeadingSensor, LidarSample, MagCalibrate, SensorError, Servos};
+use crate::math::{Coord, Dt, Length, TurnRate};
+use crate::model::compass::MagCalibration;
 use crate::model::{step, ActuatorModel, Drive, Motion, Pose, ServoCmd};
 
 /// Where the loop writes its output lines (without terminators): the UART
@@ -187,6 +192,10 @@ pub struct Controller<F, R, C, S> {
     health_compass: SensorHealth,
     faults: FaultCounters,
     ticks: u64,
+    /// The running magnetometer calibration sweep (in [`Mode::Calibrate`]).
+    calibrator: Option<MagCalibrator>,
+    /// The sweep has all its samples (finished in the same tick).
+    calibration_done: bool,
 }
 
 /// Which sensor (for the shared fault handling).
@@ -201,7 +210,7 @@ impl<F, R, C, S> Controller<F, R, C, S>
 where
     F: crate::driver::RangeSensor,
     R: crate::driver::RangeSensor,
-    C: HeadingSensor,
+    C: HeadingSensor + MagCalibrate,
     S: Servos,
 {
     /// A loop over sensors the caller has brought up (a sensor that fails
@@ -238,6 +247,8 @@ where
             health_compass: SensorHealth::new(),
             faults: FaultCounters::default(),
             ticks: 0,
+            calibrator: None,
+            calibration_done: false,
         };
         // config::timing::TELEMETRY_HZ is asserted below to fit the protocol's range
         c.set_rate(config::timing::TELEMETRY_HZ as u16);
@@ -270,6 +281,11 @@ where
     /// Carries out one parsed command (answers `# ok <command>` first).
     pub fn handle(&mut self, cmd: Command, sink: &mut impl LineSink) {
         self.command_seen = true;
+        if matches!(self.mode, Mode::Calibrate { .. })
+            && !matches!(cmd, Command::Status | Command::Help | Command::Rate { .. })
+        {
+            self.end_calibration(None, sink);
+        }
         match cmd {
             Command::Drive { motion, duration_ms } => {
                 self.respond(&Response::Ok(&cmd), sink);
@@ -307,8 +323,19 @@ where
                     heading,
                 );
             }
-            Command::Calibrate { samples: _ } => {
-                self.respond(&Response::Fail("calibration is not available yet"), sink);
+            Command::Calibrate { samples } => {
+                self.respond(&Response::Ok(&cmd), sink);
+                self.calibrator = Some(MagCalibrator::new(
+                    self.compass.asa(),
+                    config::compass::AXES,
+                    samples,
+                    config::compass::CALIBRATION_MIN_SECTORS,
+                    config::compass::CALIBRATION_MIN_RADIUS,
+                ));
+                let turn = Motion::Turn(TurnRate::from_mrad_s(config::compass::CALIBRATION_TURN_MRAD_S));
+                // samples <= u16::MAX: the product fits in u32 (asserted below)
+                let limit_ms = u32::from(samples) * config::compass::CALIBRATION_MS_PER_SAMPLE;
+                self.mode = Mode::Calibrate { drive: self.model.drive(turn), timer: Timer::new(Some(limit_ms)) };
             }
             Command::Rate { hz } => {
                 self.respond(&Response::Ok(&cmd), sink);
@@ -419,6 +446,9 @@ where
         if let Some(Reading::Compass(s)) = self.service(Which::Compass, now) {
             self.fresh_compass = Some(s);
             self.last_compass = Some(s);
+            if let Some(cal) = self.calibrator.as_mut() {
+                self.calibration_done = cal.feed(s.raw) == CalStatus::Done;
+            }
         }
     }
 
@@ -515,8 +545,17 @@ where
     }
 
     fn decide(&mut self, now: u64, sink: &mut impl LineSink) {
+        if core::mem::take(&mut self.calibration_done) {
+            let result = self.calibrator.map(|c| c.result());
+            self.end_calibration(result, sink);
+            return;
+        }
         let Some(timer) = self.mode.timer().copied() else { return };
         match timer.remaining_us(now) {
+            Some(0) if matches!(self.mode, Mode::Calibrate { .. }) => {
+                let result = self.calibrator.map(|c| c.result());
+                self.end_calibration(result, sink);
+            }
             Some(0) => {
                 self.mode = Mode::Idle;
                 self.respond(&Response::Note("done"), sink);
@@ -528,6 +567,50 @@ where
                     self.respond(&Response::Note("deadman: no command, stopped"), sink);
                 }
             }
+        }
+    }
+
+    /// Ends a calibration sweep: applies and prints a good result, reports
+    /// a bad one (`None`: abandoned for another command). The robot stops.
+    fn end_calibration(&mut self, result: Option<Result<MagCalibration, CalibrationError>>, sink: &mut impl LineSink) {
+        use core::fmt::Write;
+        let (samples, sectors) = self.calibrator.map(|c| (c.samples(), c.sectors())).unwrap_or((0, 0));
+        self.calibrator = None;
+        self.calibration_done = false;
+        if matches!(self.mode, Mode::Calibrate { .. }) {
+            self.mode = Mode::Idle;
+        }
+        let mut text: String<MAX_OUT_LINE> = String::new();
+        // a too-long line is cut short by the String's capacity: write! only fails then
+        let _ = match result {
+            None => write!(text, "calibration abandoned after {samples} samples"),
+            Some(Ok(cal)) => {
+                self.compass.set_calibration(cal);
+                let _ = write!(
+                    text,
+                    "calibration ok: {samples} samples, {sectors} of 12 sectors; applied. For config::compass:"
+                );
+                self.respond(&Response::Note(&text), sink);
+                text.clear();
+                write!(text, "{}", ConfigLine(&cal))
+            }
+            Some(Err(CalibrationError::NotEnoughSamples { have, need })) => {
+                write!(text, "calibration timed out: {have} of {need} samples")
+            }
+            Some(Err(CalibrationError::SweepIncomplete { sectors, need })) => {
+                write!(text, "calibration failed: the turn covered {sectors} of 12 sectors, need {need}")
+            }
+            Some(Err(CalibrationError::Degenerate { axis })) => {
+                write!(text, "calibration failed: magnetometer axis {axis} never changed")
+            }
+        };
+        let response = match result {
+            Some(Ok(_)) | None => Response::Note(&text),
+            Some(Err(_)) => Response::Fail(&text),
+        };
+        let mut out: String<MAX_OUT_LINE> = String::new();
+        if format_response(&response, &mut out).is_ok() {
+            sink.write_line(&out);
         }
     }
 
@@ -670,3 +753,4 @@ enum Reading {
 }
 
 const _: () = assert!(config::timing::TELEMETRY_HZ <= config::serial::MAX_TELEMETRY_HZ as u32);
+const _: () = assert!((u16::MAX as u64) * (config::compass::CALIBRATION_MS_PER_SAMPLE as u64) <= u32::MAX as u64);
