@@ -292,3 +292,62 @@ pub mod arena {
     pub const LENGTH_X: Length = Length::from_mm_f64(762.5);
     pub const WIDTH_Y: Length = Length::from_mm_f64(495.0);
 }
+
+/// The pose estimator (`model::estimator`): noise levels, gates and limits.
+/// Units: lengths in mm, angles in degrees, converted at compile time.
+pub mod estimator {
+    use super::Length;
+
+    /// Spread of a lidar's model output, mm: the readings' spread about their
+    /// mean at a fixed distance is 1.6 mm and the fitted line misses the
+    /// per-distance means by up to 1.4 mm (data `lidar_*.csv`: rms residual
+    /// of the report's lines over all readings 1.86 mm front, 1.70 mm right).
+    pub const LIDAR_SIGMA: Length = Length::from_mm_f64(2.0);
+    /// Spread of the calibrated compass heading, degrees (data
+    /// `magnetometer_heading.csv`, PAPERBOT: about 2.5 degrees).
+    pub const COMPASS_SIGMA_DEG: f64 = 2.5;
+    /// Relative spread of the car's speed going straight (std/mean of the
+    /// timed runs of one command pair; data `servo_runs.csv`: rms over the
+    /// pairs 1.9 % forward, 2.5 % backward; the larger is used).
+    pub const SPEED_SPREAD: f64 = 0.025;
+    /// Relative spread of the turn rate (data `servo_runs.csv`: rms over the
+    /// pairs 2.6 % clockwise, 1.1 % counter-clockwise; the larger is used).
+    pub const TURN_SPREAD: f64 = 0.026;
+    /// A speed error holds for a whole run, not a tick: the estimator models
+    /// it as a random walk whose variance over this distance equals the
+    /// spread squared (the lab's timed run was 450 mm, data `servo_runs.csv`).
+    pub const SPEED_CORRELATION_MM: f64 = 450.0;
+    /// The same for turns, degrees of turning (one 90-degree turn: the
+    /// drives the estimator is tested on turn by quarter turns).
+    pub const TURN_CORRELATION_DEG: f64 = 90.0;
+    /// Extra position noise always added, mm^2 per second: keeps the
+    /// covariance a margin away from singular (a turn's noise is rank one)
+    /// and from collapsing while the robot stands still; 0.7 mm after a
+    /// second, small against the lidars' 2 mm at 30 Hz.
+    pub const POSITION_FLOOR_MM2_PER_S: f64 = 0.5;
+    /// Extra heading noise always added, deg^2 per second (same reason;
+    /// 0.2 degrees after a second).
+    pub const HEADING_FLOOR_DEG2_PER_S: f64 = 0.05;
+    /// Innovation gate, standard deviations: a reading further than this
+    /// from its prediction is counted as an outlier and not used (3.5 sigma
+    /// passes 99.95 % of good readings).
+    pub const GATE_SIGMAS: f64 = 3.5;
+    /// Lidar readings hitting their wall further than this from square on
+    /// are not used (the VL53L0X's 25-degree cone makes oblique readings
+    /// short; the linearisation also degrades), degrees.
+    pub const MAX_INCIDENCE_DEG: f64 = 60.0;
+    /// Lidar readings whose ray passes closer than this to a corner are not
+    /// used (which wall the beam meets is uncertain), mm.
+    pub const CORNER_MARGIN: Length = Length::from_mm_f64(25.0);
+    /// Initial position uncertainty (one sigma), mm: the robot is put down by
+    /// hand near its start pose.
+    pub const INITIAL_SIGMA_MM: f64 = 100.0;
+    /// Initial heading uncertainty (one sigma), degrees.
+    pub const INITIAL_SIGMA_DEG: f64 = 20.0;
+    /// Largest position or heading variance kept, mm^2 (heading as (256 mm
+    /// x rad)^2, see the estimator): 256 mm (57 degrees) one sigma. Past it
+    /// the row and column are scaled down, which keeps the covariance valid.
+    pub const MAX_VARIANCE_MM2: f64 = 65536.0;
+    /// Smallest variance kept, mm^2 (same units): 0.1 mm, 0.02 degrees.
+    pub const MIN_VARIANCE_MM2: f64 = 0.01;
+}

@@ -3,9 +3,11 @@
 
 pub mod actuator;
 pub mod compass;
+pub mod estimator;
 #[cfg(feature = "std")]
 pub mod fit;
 pub mod lidar;
+pub mod measurement;
 pub mod state;
 
 pub use actuator::{ActuatorModel, Drive, Motion, MotionKind, ServoCmd, Trim};

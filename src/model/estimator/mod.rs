@@ -1,0 +1,565 @@
+//! Where the robot is: an extended Kalman filter over (x, y, theta) that
+//! fuses the state update with the two lidars and the compass in a known
+//! rectangular arena. Integer only.
+//!
+//! # The filter
+//! - State: the [`Pose`] itself (x, y as [`crate::math::Coord`], theta as an
+//!   [`Angle`]); the covariance is over the error `(dx, dy, L dtheta)` with
+//!   `L` = 256 mm, so all three components are in mm and one Q format fits
+//!   them all ([`Covariance`]: six `i32`, Q14 mm^2, symmetric by storage).
+//! - Predict: the pose moves by [`step`] (the report's equations, including
+//!   its turn case); the covariance by `F P F^T + Q`, with `F` the Jacobian
+//!   of those same equations. `Q` models the lab's speed spread as a random
+//!   walk per distance driven (or angle turned) whose variance over one
+//!   correlation length (config) equals the spread squared, the heading
+//!   drift of two mismatched wheels while driving straight, and a small
+//!   floor per second.
+//! - Lidar correction: see [`crate::model::measurement`]. The innovation is
+//!   `z |cos incidence| - A` (how far past its wall the measured ray ends,
+//!   along the wall's normal), with `H` its Jacobian and `R = sigma^2 cos^2`:
+//!   the ordinary EKF update scaled by `|cos incidence|` on both sides
+//!   (the same gain to first order), so no division by a cosine is needed.
+//!   Beams further than the config's incidence limit from square on, or
+//!   passing within the corner margin of a corner, are not used
+//!   ([`Update::Unusable`]).
+//! - Compass correction: `H = (0, 0, 1)`, the innovation the wrapped angle
+//!   difference.
+//! - Gating: a reading whose innovation `nu` has `nu^2 > gate^2 S` is an
+//!   outlier: counted, not used ([`Update::Outlier`]).
+//!
+//! # Numerical safety
+//! - Covariance update `P - K b^T` with `b = P H^T`, `K = b / S`: symmetric
+//!   by storage (only the upper triangle exists). The diagonal's products
+//!   are rounded down, so less is removed than exact arithmetic would.
+//! - After every step the covariance is conditioned: a variance past the
+//!   cap scales its row and column by 1/2 (a congruence `D P D`, which keeps
+//!   `P` positive semi-definite), a variance under the floor is raised (adds
+//!   a positive diagonal term), and a covariance with `P_ij^2 > P_ii P_jj`
+//!   (impossible for a valid covariance; only rounding at a correlation of
+//!   1 gets there) is clamped to `sqrt(P_ii P_jj)` and counted in
+//!   [`EstimatorStats::repairs`]. The per-second noise floors (config) keep
+//!   `P` a margin away from singular; the long-run test checks that `P`
+//!   stays positive definite (f64 Cholesky, every tick) for hours.
+//! - One division per correction: `c = 2^44 / S`, with `S >= R > 0` (the
+//!   measurement noise is a positive constant times a squared cosine that is
+//!   at least the incidence limit's). Predict has none.
+//!
+//! # Cost (lx106, no 32x32->64 multiply)
+//! Predict: two [`sin_cos`] for a turn (one for straight) inside [`step`],
+//! one more for the turn's Jacobian, and about 20 [`mul_hi`] (~10
+//! instructions each); no 64-bit multiply, no division. A correction: a
+//! lidar's [`Beam`] (two `sin_cos`, ~10 `mul_hi`), 14 64-bit multiplies
+//! (~40 instructions each) and one 64-bit division; the compass skips the
+//! geometry and 4 of the multiplies.
+
+#[cfg(feature = "std")]
+pub mod replay;
+
+use crate::config::estimator as cfg;
+use crate::config::geometry;
+use crate::math::{mul_hi, sin_cos, Angle, Coord, Dt};
+use crate::model::actuator::Motion;
+use crate::model::measurement::{mul_q30, Arena, Beam, Wall};
+use crate::model::state::{step, Pose};
+
+pub use crate::model::measurement::LidarId;
+
+/// What a correction did with a reading.
+#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
+pub enum Update {
+    /// Used to correct the pose.
+    Accepted,
+    /// Too far from its prediction (innovation gate): counted, not used.
+    Outlier,
+    /// The geometry makes the reading useless: the beam meets its wall too
+    /// obliquely or passes near a corner. Counted, not used.
+    Unusable,
+}
+
+impl Update {
+    pub fn is_accepted(self) -> bool {
+        self == Update::Accepted
+    }
+}
+
+/// Counts of what became of one sensor's readings (saturating).
+#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug, Default)]
+pub struct SensorStats {
+    pub accepted: u32,
+    pub outliers: u32,
+    pub unusable: u32,
+}
+
+impl SensorStats {
+    fn count(&mut self, u: Update) {
+        let c = match u {
+            Update::Accepted => &mut self.accepted,
+            Update::Outlier => &mut self.outliers,
+            Update::Unusable => &mut self.unusable,
+        };
+        *c = c.saturating_add(1);
+    }
+    /// All readings seen.
+    pub fn total(&self) -> u32 {
+        self.accepted.saturating_add(self.outliers).saturating_add(self.unusable)
+    }
+}
+
+/// Per-sensor counts, and how often the covariance needed repair.
+#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug, Default)]
+pub struct EstimatorStats {
+    pub front: SensorStats,
+    pub right: SensorStats,
+    pub compass: SensorStats,
+    /// Times the covariance broke `P_ij^2 <= P_ii P_jj` (by rounding, at a
+    /// correlation of 1) and was clamped back, or a gain overflowed.
+    pub repairs: u32,
+}
+
+/// The error covariance, symmetric, over `(dx, dy, L dtheta)` with
+/// `L` = [`HEADING_LEVER_MM`]: every entry in Q14 mm^2 (2^-14 mm^2).
+/// Invariants after every step: `MIN <= P_ii <= MAX` and
+/// `P_ij^2 <= P_ii P_jj`, so every entry is at most 2^30 in magnitude.
+#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug, Default)]
+pub struct Covariance {
+    pub xx: i32,
+    pub xy: i32,
+    pub xt: i32,
+    pub yy: i32,
+    pub yt: i32,
+    pub tt: i32,
+}
+
+/// The covariance's diagonal in the units people read (for telemetry):
+/// one-sigma position in mm (Q16, a [`crate::math::Length`]'s bits) and heading as an [`Angle`].
+#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug, Default)]
+pub struct PoseSigma {
+    pub x: crate::math::Length,
+    pub y: crate::math::Length,
+    pub theta: Angle,
+}
+
+/// The lever that turns a heading error into mm: `L dtheta`, L = 256 mm.
+pub const HEADING_LEVER_MM: i32 = 256;
+
+// ---- Constants, evaluated by the compiler from the config ----
+
+const Q14: f64 = 16384.0;
+const TAU: f64 = core::f64::consts::TAU;
+const L: f64 = HEADING_LEVER_MM as f64;
+
+const fn to_i32(x: f64) -> i32 {
+    crate::math::round_f64(x) as i32
+}
+/// cos(x) for |x| <= pi, by its series (const: for the config's angles).
+const fn cos_f64(x: f64) -> f64 {
+    let (mut term, mut sum, mut k) = (1.0, 1.0, 1);
+    while k < 20 {
+        term = -term * x * x / ((2 * k - 1) as f64 * (2 * k) as f64);
+        sum += term;
+        k += 1;
+    }
+    sum
+}
+
+/// Lidar variance, Q14 mm^2.
+const R_LIDAR: i32 = to_i32(cfg::LIDAR_SIGMA.0 as f64 / 65536.0 * (cfg::LIDAR_SIGMA.0 as f64 / 65536.0) * Q14);
+/// Compass variance in (L rad)^2, Q14 mm^2.
+const R_COMPASS: i64 = crate::math::round_f64(
+    (cfg::COMPASS_SIGMA_DEG * TAU / 360.0 * L) * (cfg::COMPASS_SIGMA_DEG * TAU / 360.0 * L) * Q14,
+);
+/// gate^2 in Q8.
+const GATE_SQ_Q8: i64 = crate::math::round_f64(cfg::GATE_SIGMAS * cfg::GATE_SIGMAS * 256.0);
+/// cos(max incidence), Q30.
+const MIN_NORMAL: i32 = to_i32(cos_f64(cfg::MAX_INCIDENCE_DEG * TAU / 360.0) * 1_073_741_824.0);
+/// Straight: distance variance per mm driven (k^2 Lc), as a factor for
+/// `mul_hi(|d| in Q24 mm, .)` giving Q14 mm^2: k^2 Lc 2^14 2^32 / 2^24.
+const K_DIST: i32 = to_i32(cfg::SPEED_SPREAD * cfg::SPEED_SPREAD * cfg::SPEED_CORRELATION_MM * Q14 * 256.0);
+/// Straight: heading variance per mm driven, (k L / axle)^2 Lc, same scaling.
+const K_DRIFT: i32 = {
+    let axle = geometry::AXLE_LENGTH.0 as f64 / 65536.0;
+    let r = cfg::SPEED_SPREAD * L / axle;
+    to_i32(r * r * cfg::SPEED_CORRELATION_MM * Q14 * 256.0)
+};
+/// Turn: heading variance (L rad)^2 Q14 per angle LSB turned, times 2^32
+/// (for `mul_hi(|turn| in LSB, .)`): k^2 Lc_rad L^2 2^14 (2 pi / 2^32) 2^32.
+const K_TURN: i32 = {
+    let lc = cfg::TURN_CORRELATION_DEG * TAU / 360.0;
+    to_i32(cfg::TURN_SPREAD * cfg::TURN_SPREAD * lc * L * L * Q14 * TAU)
+};
+/// Floors per microsecond, Q14 mm^2 times 2^16.
+const FLOOR_POS: u32 = crate::math::round_f64(cfg::POSITION_FLOOR_MM2_PER_S * Q14 / 1e6 * 65_536.0) as u32;
+const FLOOR_HEADING: u32 = {
+    let rad = TAU / 360.0;
+    crate::math::round_f64(cfg::HEADING_FLOOR_DEG2_PER_S * rad * rad * L * L * Q14 / 1e6 * 65_536.0) as u32
+};
+/// D / L in Q31 (D < 128 mm by the config's assert, so D / L < 1/2).
+const D_OVER_L_Q31: i32 = to_i32(geometry::ROTATION_TO_REFERENCE.0 as f64 / 65536.0 / L * 2_147_483_648.0);
+const P_MAX: i32 = to_i32(cfg::MAX_VARIANCE_MM2 * Q14);
+const P_MIN: i32 = to_i32(cfg::MIN_VARIANCE_MM2 * Q14);
+const P0_POS: i32 = to_i32(cfg::INITIAL_SIGMA_MM * cfg::INITIAL_SIGMA_MM * Q14);
+const P0_HEADING: i32 = {
+    let s = cfg::INITIAL_SIGMA_DEG * TAU / 360.0 * L;
+    to_i32(s * s * Q14)
+};
+/// Angle LSB per (L rad) mm, Q16: 2^32 / (2 pi L) * 2^16.
+const LSB_PER_TILDE_MM_Q16: i64 = crate::math::round_f64(4_294_967_296.0 / (TAU * L) * 65536.0);
+/// (L rad) mm in Q16 per angle LSB, times 2^32 (for `mul_hi`): 2 pi L 2^16 / 2^32 * 2^32.
+const TILDE_Q16_PER_LSB: i32 = to_i32(TAU * L * 65536.0);
+
+const _: () = {
+    assert!(R_LIDAR > 0 && R_COMPASS > 0 && R_COMPASS < (1 << 40));
+    assert!(MIN_NORMAL > (1 << 28) && MIN_NORMAL <= (1 << 30));
+    assert!(P_MIN > 0 && P_MIN < P_MAX && P_MAX <= (1 << 30));
+    assert!(P0_POS <= P_MAX && P0_HEADING <= P_MAX);
+    assert!(K_DIST > 0 && K_DRIFT > 0 && K_TURN > 0);
+    // floor * dt must fit u32 for dt <= 65535 us
+    assert!((FLOOR_POS as u64) * 65_535 < (1 << 32) && (FLOOR_HEADING as u64) * 65_535 < (1 << 32));
+};
+
+/// One row of `H` for a scalar measurement: `sign` times a unit on x or y
+/// (or nothing), plus `theta` (Q16, per mm of `L dtheta`) on the heading.
+#[derive(Clone, Copy)]
+struct Row {
+    /// 0 = x, 1 = y, with the sign of the unit entry; `None` for the compass.
+    pos: Option<(u8, bool)>,
+    /// Q16; |theta| < 2^20 (at most (|z| + |lateral|) / L with |z| < 2^11 mm).
+    theta: i32,
+}
+
+/// The pose estimator. See the module docs.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub struct Estimator {
+    pose: Pose,
+    p: Covariance,
+    arena: Arena,
+    stats: EstimatorStats,
+}
+
+impl Estimator {
+    /// Starts at `initial` in the config's arena, with the config's initial
+    /// uncertainty.
+    pub fn new(initial: Pose) -> Estimator {
+        Estimator::with_arena(initial, Arena::DEFAULT)
+    }
+
+    /// Starts at `initial` in `arena`.
+    pub fn with_arena(initial: Pose, arena: Arena) -> Estimator {
+        Estimator { pose: initial, p: Self::initial_covariance(), arena, stats: EstimatorStats::default() }
+    }
+
+    fn initial_covariance() -> Covariance {
+        Covariance { xx: P0_POS, xy: 0, xt: 0, yy: P0_POS, yt: 0, tt: P0_HEADING }
+    }
+
+    /// The estimated pose.
+    pub fn pose(&self) -> Pose {
+        self.pose
+    }
+
+    pub fn arena(&self) -> Arena {
+        self.arena
+    }
+
+    /// Forgets everything but the counts: the pose is `pose`, the
+    /// uncertainty the config's initial one.
+    pub fn reset(&mut self, pose: Pose) {
+        self.pose = pose;
+        self.p = Self::initial_covariance();
+    }
+
+    /// Counts of accepted and rejected readings per sensor.
+    pub fn stats(&self) -> EstimatorStats {
+        self.stats
+    }
+
+    /// The full covariance (Q14 mm^2, heading as `L dtheta`, see [`Covariance`]).
+    pub fn covariance(&self) -> Covariance {
+        self.p
+    }
+
+    /// The covariance's diagonal: variances of x and y in Q14 mm^2 and of
+    /// the heading in Q14 (256 mm rad)^2 (for telemetry).
+    pub fn covariance_diagonal(&self) -> [i32; 3] {
+        [self.p.xx, self.p.yy, self.p.tt]
+    }
+
+    /// One-sigma uncertainties in mm and as an angle (integer square roots,
+    /// no division; for telemetry).
+    pub fn sigma(&self) -> PoseSigma {
+        // sqrt(P Q14 mm^2) = isqrt(P) 2^-7 mm -> Q16: << 9. P <= 2^30: isqrt <= 2^15.
+        let len = |v: i32| crate::math::Length((isqrt(v.max(0) as u32) << 9) as i32);
+        // sqrt(P_tt) 2^-7 mm / L rad -> LSB: isqrt 2^-7 / 256 * 2^32 / (2 pi) = isqrt * 2^17 / (2 pi)
+        let t = isqrt(self.p.tt.max(0) as u32);
+        PoseSigma { x: len(self.p.xx), y: len(self.p.yy), theta: Angle(t.saturating_mul(20_861)) }
+    }
+
+    /// Moves the pose by `motion` held for `dt` and grows the uncertainty.
+    pub fn predict(&mut self, motion: Motion, dt: Dt) {
+        let before = self.pose;
+        self.pose = step(&before, motion, dt);
+        let p = &mut self.p;
+        match motion {
+            Motion::Stop => {}
+            Motion::Straight(v) => {
+                let d = v.distance_q24(dt); // |d| < 2^29 (Q24 mm, at most 65.5 mm)
+                let (s, c) = sin_cos(before.theta);
+                // F: dx/d(L theta) = -d s / L, dy/d(L theta) = d c / L; in Q30
+                // that is exactly mul_hi(d Q24, s Q30) (2^30 / (2^22 * 256) = 1).
+                let f1 = -mul_hi(d, s);
+                let f2 = mul_hi(d, c);
+                propagate(p, f1, f2);
+                // Q: distance noise along (c, s), heading drift.
+                let ad = d.saturating_abs();
+                let var_d = mul_hi(ad, K_DIST);
+                let vc = mul_q30(var_d, c);
+                p.xx = p.xx.saturating_add(mul_q30(vc, c));
+                p.xy = p.xy.saturating_add(mul_q30(vc, s));
+                p.yy = p.yy.saturating_add(mul_q30(mul_q30(var_d, s), s));
+                p.tt = p.tt.saturating_add(mul_hi(ad, K_DRIFT));
+            }
+            Motion::Turn(_) => {
+                let (s0, c0) = sin_cos(before.theta);
+                let (s1, c1) = sin_cos(self.pose.theta);
+                // The report's turn: x' = x - D (c0 - c1), y' = y + D (s0 - s1):
+                // dx'/dtheta = D (s0 - s1), dy'/dtheta = D (c0 - c1). Halves
+                // of Q30 values keep the differences in i32 (Q29); D/L Q31
+                // times Q29 gives Q28 from mul_hi, hence the * 4.
+                let f1 = mul_hi(D_OVER_L_Q31, (s0 >> 1) - (s1 >> 1)).saturating_mul(4);
+                let f2 = mul_hi(D_OVER_L_Q31, (c0 >> 1) - (c1 >> 1)).saturating_mul(4);
+                propagate(p, f1, f2);
+                // Q: the turned angle's noise enters through G = (-D s1 / L, -D c1 / L, 1).
+                let turned = self.pose.theta.diff(before.theta).saturating_abs();
+                let vt = mul_hi(turned, K_TURN);
+                let g1 = -mul_hi(D_OVER_L_Q31, s1).saturating_mul(2);
+                let g2 = -mul_hi(D_OVER_L_Q31, c1).saturating_mul(2);
+                let (v1, v2) = (mul_q30(vt, g1), mul_q30(vt, g2));
+                p.xx = p.xx.saturating_add(mul_q30(v1, g1));
+                p.xy = p.xy.saturating_add(mul_q30(v1, g2));
+                p.yy = p.yy.saturating_add(mul_q30(v2, g2));
+                p.xt = p.xt.saturating_add(v1);
+                p.yt = p.yt.saturating_add(v2);
+                p.tt = p.tt.saturating_add(vt);
+            }
+        }
+        // Floors: dt <= 65535 us, the products fit u32 (asserted above).
+        let dt = dt.as_micros();
+        let fp = (FLOOR_POS.saturating_mul(dt) >> 16) as i32;
+        let fh = (FLOOR_HEADING.saturating_mul(dt) >> 16) as i32;
+        p.xx = p.xx.saturating_add(fp);
+        p.yy = p.yy.saturating_add(fp);
+        p.tt = p.tt.saturating_add(fh);
+        self.condition();
+    }
+
+    /// Corrects the pose with a lidar's model output (distance from the
+    /// reference point along the beam, see [`crate::model::lidar`]).
+    pub fn update_lidar(&mut self, which: LidarId, distance: crate::math::Length) -> Update {
+        let mount = which.mount();
+        let beam = Beam::new(&self.arena, &self.pose, &mount);
+        let result = if !beam.square_enough(MIN_NORMAL) || beam.near_corner(cfg::CORNER_MARGIN) {
+            Update::Unusable
+        } else {
+            // |z| < 2^11 mm keeps H's heading entry below 2^20 (Q16).
+            let z = crate::math::Length(distance.0.clamp(-(1 << 27), 1 << 27));
+            let nu = beam.normal_miss(z);
+            let (s, c) = (beam.sin, beam.cos);
+            // d(normal_miss)/d(state), see the module docs of `measurement`:
+            // x-walls: sign(c) (-1, 0, z s + lat c); y-walls: sign(s) (0, -1, lat s - z c).
+            let (axis, lever, sign_pos) = if beam.wall.is_x_wall() {
+                (0u8, mul_q30(z.0, s).saturating_add(mul_q30(beam.lateral.0, c)), beam.wall == Wall::North)
+            } else {
+                (1u8, mul_q30(beam.lateral.0, s).saturating_sub(mul_q30(z.0, c)), beam.wall == Wall::East)
+            };
+            // lever is mm Q16; / L -> Q16 per (L rad) mm.
+            let theta = lever >> 8;
+            // North and East: H = (-1 on the axis, +lever); South and West: (+1, -lever).
+            let row = if sign_pos {
+                Row { pos: Some((axis, false)), theta }
+            } else {
+                Row { pos: Some((axis, true)), theta: -theta }
+            };
+            // R = sigma^2 cos^2(incidence): normal^2 in Q30 via mul_hi (Q28) * 4.
+            let n2 = mul_hi(beam.normal, beam.normal).saturating_mul(4);
+            let r = i64::from(mul_q30(R_LIDAR, n2)).max(1);
+            self.correct(row, nu.0, r)
+        };
+        let stats = match which {
+            LidarId::Front => &mut self.stats.front,
+            LidarId::Right => &mut self.stats.right,
+        };
+        stats.count(result);
+        result
+    }
+
+    /// Corrects the heading with a compass reading (clockwise from north).
+    pub fn update_heading(&mut self, heading: Angle) -> Update {
+        let diff = heading.diff(self.pose.theta);
+        // angle LSB -> (L rad) mm Q16: |result| < 2^31 * 0.025
+        let nu = mul_hi(diff, TILDE_Q16_PER_LSB);
+        let result = self.correct(Row { pos: None, theta: 1 << 16 }, nu, R_COMPASS);
+        self.stats.compass.count(result);
+        result
+    }
+
+    /// The scalar Kalman correction for innovation `nu` (Q16 mm), row `h`,
+    /// noise `r` (Q14 mm^2, > 0).
+    fn correct(&mut self, h: Row, nu: i32, r: i64) -> Update {
+        let p = self.p;
+        let col = |i: u8| -> [i64; 3] {
+            match i {
+                0 => [p.xx, p.xy, p.xt].map(i64::from),
+                1 => [p.xy, p.yy, p.yt].map(i64::from),
+                _ => [p.xt, p.yt, p.tt].map(i64::from),
+            }
+        };
+        // b = P H^T (Q14): |P_ij| <= 2^30, |theta| < 2^20: each term < 2^34.
+        let ct = col(2);
+        let th = i64::from(h.theta);
+        let mut b = [(ct[0] * th) >> 16, (ct[1] * th) >> 16, (ct[2] * th) >> 16];
+        if let Some((axis, positive)) = h.pos {
+            let cp = col(axis);
+            for (bi, pi) in b.iter_mut().zip(cp) {
+                *bi = if positive { *bi + pi } else { *bi - pi };
+            }
+        }
+        // S = H b + R (Q14): |b| < 2^35, so each term < 2^39.
+        let mut s = (b[2] * th) >> 16;
+        if let Some((axis, positive)) = h.pos {
+            let bp = if axis == 0 { b[0] } else { b[1] };
+            s = if positive { s + bp } else { s - bp };
+        }
+        let s = s.max(0) + r; // H P H^T >= 0 for a valid P; r > 0
+        // Gate: nu^2 (Q32) >> 18 -> Q14, against gate^2 S; nu^2 < 2^62, S < 2^41.
+        let nu64 = i64::from(nu);
+        if (nu64 * nu64) >> 18 > (s * GATE_SQ_Q8) >> 8 {
+            return Update::Outlier;
+        }
+        // The one division: c = 2^44 / S, S >= r >= 1.
+        let c = (1i64 << 44) / s.max(1);
+        // K = b / S in Q16: b c = K 2^44. |K| is bounded by sqrt(P_ii / r)
+        // for a valid P; checked anyway.
+        let mut k = [0i64; 3];
+        for (ki, bi) in k.iter_mut().zip(b) {
+            match bi.checked_mul(c) {
+                Some(v) => *ki = v >> 28,
+                None => {
+                    self.stats.repairs = self.stats.repairs.saturating_add(1);
+                    return Update::Outlier;
+                }
+            }
+        }
+        // State: K nu (Q16 * Q16 = Q32 mm, a Coord's unit).
+        let dx = k[0].saturating_mul(nu64);
+        let dy = k[1].saturating_mul(nu64);
+        let dt = k[2].saturating_mul(nu64) >> 16; // (L rad) mm Q16
+        self.pose.x = Coord(self.pose.x.0.saturating_add(dx));
+        self.pose.y = Coord(self.pose.y.0.saturating_add(dy));
+        let dlsb = dt.saturating_mul(LSB_PER_TILDE_MM_Q16) >> 32;
+        self.pose.theta = self.pose.theta.wrapping_add(Angle(dlsb as u32)); // modulo one turn
+        // P -= K b^T (upper triangle; K_i b_j = b_i b_j / S, Q16 * Q14 >> 16).
+        let sub = |pij: i32, ki: i64, bj: i64| -> i32 {
+            let v = i64::from(pij) - (ki.saturating_mul(bj) >> 16);
+            v.clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32
+        };
+        let q = &mut self.p;
+        q.xx = sub(q.xx, k[0], b[0]);
+        q.xy = sub(q.xy, k[0], b[1]);
+        q.xt = sub(q.xt, k[0], b[2]);
+        q.yy = sub(q.yy, k[1], b[1]);
+        q.yt = sub(q.yt, k[1], b[2]);
+        q.tt = sub(q.tt, k[2], b[2]);
+        self.condition();
+        Update::Accepted
+    }
+
+    /// Keeps the covariance valid (see the module docs).
+    fn condition(&mut self) {
+        let p = &mut self.p;
+        // Cap: scale row and column i by 1/2 (D P D, still PSD).
+        if p.xx > P_MAX {
+            p.xx >>= 2;
+            p.xy >>= 1;
+            p.xt >>= 1;
+        }
+        if p.yy > P_MAX {
+            p.yy >>= 2;
+            p.xy >>= 1;
+            p.yt >>= 1;
+        }
+        if p.tt > P_MAX {
+            p.tt >>= 2;
+            p.xt >>= 1;
+            p.yt >>= 1;
+        }
+        // Floor: adding to the diagonal keeps P PSD.
+        p.xx = p.xx.max(P_MIN);
+        p.yy = p.yy.max(P_MIN);
+        p.tt = p.tt.max(P_MIN);
+        let mut repairs = 0u32;
+        for (pij, pii, pjj) in [(&mut p.xy, p.xx, p.yy), (&mut p.xt, p.xx, p.tt), (&mut p.yt, p.yy, p.tt)] {
+            // 0 < pii, pjj <= 2^31: the products fit i64 (and u64).
+            let bound = i64::from(pii) * i64::from(pjj);
+            if i64::from(*pij) * i64::from(*pij) > bound {
+                // The smallest change that restores |P_ij| <= sqrt(P_ii P_jj):
+                // only rounding at a correlation of 1 gets here.
+                let m = isqrt64(bound as u64).min(i32::MAX as u32) as i32;
+                *pij = if *pij < 0 { -m } else { m };
+                repairs += 1;
+            }
+        }
+        self.stats.repairs = self.stats.repairs.saturating_add(repairs);
+    }
+}
+
+/// Integer square root (floor), no division: bit by bit, 16 rounds.
+pub fn isqrt(v: u32) -> u32 {
+    let (mut rem, mut root) = (v, 0u32);
+    let mut bit = 1u32 << 30;
+    while bit > rem {
+        bit >>= 2;
+    }
+    while bit != 0 {
+        if rem >= root + bit {
+            rem -= root + bit;
+            root = (root >> 1) + bit;
+        } else {
+            root >>= 1;
+        }
+        bit >>= 2;
+    }
+    root
+}
+
+/// Integer square root (floor) of a `u64`, no division: bit by bit, 32 rounds.
+pub fn isqrt64(v: u64) -> u32 {
+    let (mut rem, mut root) = (v, 0u64);
+    let mut bit = 1u64 << 62;
+    while bit > rem {
+        bit >>= 2;
+    }
+    while bit != 0 {
+        if rem >= root + bit {
+            rem -= root + bit;
+            root = (root >> 1) + bit;
+        } else {
+            root >>= 1;
+        }
+        bit >>= 2;
+    }
+    root as u32
+}
+
+/// `F P F^T` for `F = I + f1 e_x e_t^T + f2 e_y e_t^T` (f in Q30, |f| < 1).
+fn propagate(p: &mut Covariance, f1: i32, f2: i32) {
+    // new P_xt = P_xt + f1 P_tt, new P_yt = P_yt + f2 P_tt
+    let u1 = p.xt.saturating_add(mul_q30(p.tt, f1));
+    let u2 = p.yt.saturating_add(mul_q30(p.tt, f2));
+    // P_xx + 2 f1 P_xt + f1^2 P_tt = P_xx + f1 (P_xt + u1)
+    p.xx = p.xx.saturating_add(mul_q30(p.xt, f1)).saturating_add(mul_q30(u1, f1));
+    p.yy = p.yy.saturating_add(mul_q30(p.yt, f2)).saturating_add(mul_q30(u2, f2));
+    // P_xy + f1 P_yt + f2 P_xt + f1 f2 P_tt = P_xy + f1 P_yt + f2 u1
+    p.xy = p.xy.saturating_add(mul_q30(p.yt, f1)).saturating_add(mul_q30(u1, f2));
+    p.xt = u1;
+    p.yt = u2;
+}
