@@ -8,3 +8,7 @@ pub mod arena;
 pub mod body;
 pub mod noise;
 pub mod svg;
+pub mod bus;
+pub mod mpu9250;
+pub mod sensors;
+pub mod vl53l0x;
