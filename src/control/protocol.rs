@@ -94,6 +94,7 @@ pub mod telemetry;
 
 pub use command::{format_command, parse, Command, Field, ParseError, Side};
 pub use line::{Line, LineBuffer};
+pub use number::TextOut;
 pub use response::{format_response, format_status, Response, Status, ERR, HELP, OK};
 pub use telemetry::{
     classify_line, format_row, format_telemetry, telemetry_header, FaultCounters, LineKind, Telemetry, TelemetryRow,

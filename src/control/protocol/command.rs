@@ -1,9 +1,7 @@
 //! Commands: the grammar (see the module docs of [`super`]), the parser and
 //! the canonical form that `ok` responses echo.
 
-use heapless::String;
-
-use super::number::{parse_fixed, push_fixed, push_str, push_u32, NumError};
+use super::number::{parse_fixed, push_fixed, push_str, push_u32, NumError, TextOut};
 use super::{Overflow, MAX_LINE};
 use crate::config::{compass, serial};
 use crate::math::{Angle, Speed, TurnRate};
@@ -184,7 +182,7 @@ pub enum ParseError {
 impl ParseError {
     /// Writes the message (without the `# err ` prefix), e.g.
     /// `speed out of range 0.001..0.300 m/s`.
-    pub fn write<const N: usize>(&self, out: &mut String<N>) -> Result<(), Overflow> {
+    pub fn write(&self, out: &mut dyn TextOut) -> Result<(), Overflow> {
         match *self {
             ParseError::Empty => push_str(out, "empty line"),
             ParseError::TooLong => {
@@ -224,7 +222,7 @@ impl ParseError {
 
 /// "a number 0.001..0.300 m/s with up to 3 decimals", "an integer 0..100 Hz",
 /// "left or right".
-fn write_want<const N: usize>(out: &mut String<N>, f: Field) -> Result<(), Overflow> {
+fn write_want(out: &mut dyn TextOut, f: Field) -> Result<(), Overflow> {
     if f.range().is_none() {
         return push_str(out, "left or right");
     }
@@ -239,7 +237,7 @@ fn write_want<const N: usize>(out: &mut String<N>, f: Field) -> Result<(), Overf
 }
 
 /// "0.001..0.300 m/s"
-fn write_range<const N: usize>(out: &mut String<N>, f: Field) -> Result<(), Overflow> {
+fn write_range(out: &mut dyn TextOut, f: Field) -> Result<(), Overflow> {
     let Some((lo, hi)) = f.range() else { return push_str(out, "left or right") };
     push_fixed(out, lo, f.decimals())?;
     push_str(out, "..")?;
@@ -430,7 +428,7 @@ pub fn parse(line: &[u8]) -> Result<Command, ParseError> {
     Ok(command)
 }
 
-fn push_duration<const N: usize>(out: &mut String<N>, duration_ms: Option<u32>) -> Result<(), Overflow> {
+fn push_duration(out: &mut dyn TextOut, duration_ms: Option<u32>) -> Result<(), Overflow> {
     if let Some(ms) = duration_ms {
         push_str(out, " ")?;
         push_fixed(out, ms.min(i32::MAX as u32) as i32, 3)?;
@@ -441,7 +439,7 @@ fn push_duration<const N: usize>(out: &mut String<N>, duration_ms: Option<u32>) 
 /// Writes the canonical form of a command: the grammar's short keyword and
 /// every number at the field's resolution (`fwd 0.130 2.000`). Parsing the
 /// canonical form gives the same command back.
-pub fn format_command<const N: usize>(cmd: &Command, out: &mut String<N>) -> Result<(), Overflow> {
+pub fn format_command(cmd: &Command, out: &mut dyn TextOut) -> Result<(), Overflow> {
     match *cmd {
         Command::Drive { motion, duration_ms } => {
             match motion {

@@ -7,6 +7,25 @@ use heapless::String;
 
 use super::Overflow;
 
+/// Where the formatters write: a bounded text buffer. Every formatter takes
+/// `&mut dyn TextOut` (pass `&mut some_heapless_string`), so its code exists
+/// once in the firmware rather than once per buffer size.
+pub trait TextOut {
+    /// Appends `s`, or fails leaving what fitted.
+    fn put_str(&mut self, s: &str) -> Result<(), Overflow>;
+    /// Appends one ASCII byte (a non-ASCII byte is written as `?`).
+    fn put_byte(&mut self, b: u8) -> Result<(), Overflow>;
+}
+
+impl<const N: usize> TextOut for String<N> {
+    fn put_str(&mut self, s: &str) -> Result<(), Overflow> {
+        self.push_str(s).map_err(|_| Overflow)
+    }
+    fn put_byte(&mut self, b: u8) -> Result<(), Overflow> {
+        self.push(if b.is_ascii() { char::from(b) } else { '?' }).map_err(|_| Overflow)
+    }
+}
+
 /// Why a token is not a number.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
 pub enum NumError {
@@ -72,26 +91,20 @@ pub fn parse_fixed_parts(token: &[u8], decimals: u32) -> Result<(bool, u32), Num
 }
 
 /// Appends `s`.
-pub fn push_str<const N: usize>(out: &mut String<N>, s: &str) -> Result<(), Overflow> {
-    out.push_str(s).map_err(|_| Overflow)
+pub fn push_str(out: &mut dyn TextOut, s: &str) -> Result<(), Overflow> {
+    out.put_str(s)
 }
 
 /// Appends one ASCII byte (non-ASCII bytes become `?`).
-pub fn push_byte<const N: usize>(out: &mut String<N>, b: u8) -> Result<(), Overflow> {
-    let c = if b.is_ascii() { char::from(b) } else { '?' };
-    out.push(c).map_err(|_| Overflow)
+pub fn push_byte(out: &mut dyn TextOut, b: u8) -> Result<(), Overflow> {
+    out.put_byte(b)
 }
 
 /// Appends `magnitude / 10^decimals` as a decimal with exactly `decimals`
 /// digits after the point (none and no point when `decimals` is 0), with a
 /// `-` in front when `negative` and the magnitude is not zero.
 /// `decimals` above 9 is treated as 9.
-pub fn push_fixed_parts<const N: usize>(
-    out: &mut String<N>,
-    negative: bool,
-    magnitude: u32,
-    decimals: u32,
-) -> Result<(), Overflow> {
+pub fn push_fixed_parts(out: &mut dyn TextOut, negative: bool, magnitude: u32, decimals: u32) -> Result<(), Overflow> {
     // u32::MAX has 10 digits; with up to 9 decimals a leading zero makes 10.
     let mut digits = [0u8; 10];
     let decimals = decimals.min(9) as usize;
@@ -124,16 +137,16 @@ pub fn push_fixed_parts<const N: usize>(
 }
 
 /// Appends a signed scaled value as a decimal (see [`push_fixed_parts`]).
-pub fn push_fixed<const N: usize>(out: &mut String<N>, value: i32, decimals: u32) -> Result<(), Overflow> {
+pub fn push_fixed(out: &mut dyn TextOut, value: i32, decimals: u32) -> Result<(), Overflow> {
     push_fixed_parts(out, value < 0, value.unsigned_abs(), decimals)
 }
 
 /// Appends an unsigned integer.
-pub fn push_u32<const N: usize>(out: &mut String<N>, value: u32) -> Result<(), Overflow> {
+pub fn push_u32(out: &mut dyn TextOut, value: u32) -> Result<(), Overflow> {
     push_fixed_parts(out, false, value, 0)
 }
 
 /// Appends a signed integer.
-pub fn push_i32<const N: usize>(out: &mut String<N>, value: i32) -> Result<(), Overflow> {
+pub fn push_i32(out: &mut dyn TextOut, value: i32) -> Result<(), Overflow> {
     push_fixed(out, value, 0)
 }

@@ -2,10 +2,8 @@
 //! starts with `#`, so a plotting script that skips `#` lines reads the
 //! telemetry directly.
 
-use heapless::String;
-
 use super::command::{format_command, q8_to_centi, Command, ParseError};
-use super::number::{push_byte, push_fixed, push_str, push_u32};
+use super::number::{push_byte, push_fixed, push_str, push_u32, TextOut};
 use super::telemetry::{motion_word, FaultCounters};
 use super::Overflow;
 use crate::model::{Motion, Pose, ServoCmd, Trim};
@@ -30,7 +28,7 @@ pub enum Response<'a> {
 
 /// Appends text, with any byte that is not printable ASCII replaced by `?`
 /// (keeps the answer on one line).
-fn push_text<const N: usize>(out: &mut String<N>, text: &str) -> Result<(), Overflow> {
+fn push_text(out: &mut dyn TextOut, text: &str) -> Result<(), Overflow> {
     for b in text.bytes() {
         push_byte(out, if (0x20..0x7F).contains(&b) { b } else { b'?' })?;
     }
@@ -40,7 +38,7 @@ fn push_text<const N: usize>(out: &mut String<N>, text: &str) -> Result<(), Over
 /// Appends a response line (no terminator). On [`Overflow`] the string
 /// holds a partial line: clear it. A `String<`[`super::MAX_RESPONSE`]`>` fits
 /// every `Ok` and `Err` response.
-pub fn format_response<const N: usize>(response: &Response, out: &mut String<N>) -> Result<(), Overflow> {
+pub fn format_response(response: &Response, out: &mut dyn TextOut) -> Result<(), Overflow> {
     match *response {
         Response::Ok(cmd) => {
             push_str(out, OK)?;
@@ -93,7 +91,7 @@ pub struct Status {
 /// heading_deg=90.000 left_cmd=107.00 right_cmd=61.00 trim_left=0.00 trim_right=-1.50 rate_hz=10
 /// front=ok right=ok compass=down faults=0/0/0/0/0/0` (one line; `left_ms` only for timed
 /// commands; faults in telemetry column order). Fits in [`super::MAX_OUT_LINE`].
-pub fn format_status<const N: usize>(s: &Status, out: &mut String<N>) -> Result<(), Overflow> {
+pub fn format_status(s: &Status, out: &mut dyn TextOut) -> Result<(), Overflow> {
     let (v, w) = match s.motion {
         Motion::Stop => (0, 0),
         Motion::Straight(v) => (v.to_mm_s(), 0),

@@ -2,9 +2,7 @@
 //! written from integers at a fixed resolution, and [`TelemetryRow`] is
 //! exactly what a row holds, so parsing a row gives back the row's values.
 
-use heapless::String;
-
-use super::number::{push_fixed, push_fixed_parts, push_str, push_u32};
+use super::number::{push_fixed_parts, push_str, TextOut};
 use super::Overflow;
 use crate::driver::{CompassSample, LidarSample};
 use crate::math::Length;
@@ -148,57 +146,74 @@ impl From<&Telemetry> for TelemetryRow {
 
 /// Appends one telemetry row (no terminator) for `t`. On [`Overflow`] the
 /// string holds a partial row: clear it. A `String<`[`MAX_ROW`]`>` always fits.
-pub fn format_telemetry<const N: usize>(t: &Telemetry, out: &mut String<N>) -> Result<(), Overflow> {
+pub fn format_telemetry(t: &Telemetry, out: &mut dyn TextOut) -> Result<(), Overflow> {
     format_row(&TelemetryRow::from(t), out)
 }
 
-/// Appends a row's values as CSV (no terminator).
-pub fn format_row<const N: usize>(r: &TelemetryRow, out: &mut String<N>) -> Result<(), Overflow> {
-    fn sep<const N: usize>(out: &mut String<N>) -> Result<(), Overflow> {
-        push_str(out, ",")
+/// One CSV cell: empty, a word, or a decimal (sign, magnitude, decimals).
+#[derive(Clone, Copy)]
+enum Cell {
+    Empty,
+    Word(&'static str),
+    Num(bool, u32, u32),
+}
+
+impl Cell {
+    fn signed(v: i32, decimals: u32) -> Cell {
+        Cell::Num(v < 0, v.unsigned_abs(), decimals)
     }
-    fn opt<const N: usize>(out: &mut String<N>, v: Option<i32>, decimals: u32) -> Result<(), Overflow> {
-        sep(out)?;
-        match v {
-            Some(v) => push_fixed(out, v, decimals),
-            None => Ok(()),
-        }
+    fn unsigned(v: u32, decimals: u32) -> Cell {
+        Cell::Num(false, v, decimals)
     }
-    push_u32(out, r.t_ms)?;
-    sep(out)?;
-    push_fixed(out, r.x_dmm, 1)?;
-    sep(out)?;
-    push_fixed(out, r.y_dmm, 1)?;
-    sep(out)?;
-    push_fixed_parts(out, false, r.heading_mdeg, 3)?;
-    sep(out)?;
-    push_str(out, motion_word(r.motion))?;
-    sep(out)?;
-    push_fixed(out, r.v_mm_s, 3)?;
-    sep(out)?;
-    push_fixed(out, r.w_mrad_s, 3)?;
-    sep(out)?;
-    push_fixed_parts(out, false, r.left_cmd_centi, 2)?;
-    sep(out)?;
-    push_fixed_parts(out, false, r.right_cmd_centi, 2)?;
-    opt(out, r.front_raw_mm.map(i32::from), 0)?;
-    opt(out, r.front_dmm, 1)?;
-    opt(out, r.right_raw_mm.map(i32::from), 0)?;
-    opt(out, r.right_dmm, 1)?;
-    for i in 0..3 {
-        opt(out, r.mag_raw.and_then(|m| m.get(i).copied()).map(i32::from), 0)?;
+    fn opt(v: Option<i32>, decimals: u32) -> Cell {
+        v.map_or(Cell::Empty, |v| Cell::signed(v, decimals))
     }
-    for i in 0..3 {
-        opt(out, r.mag_field.and_then(|m| m.get(i).copied()), 0)?;
-    }
-    sep(out)?;
-    if let Some(mdeg) = r.compass_mdeg {
-        push_fixed_parts(out, false, mdeg, 3)?;
-    }
+}
+
+/// Column `i` of a row (empty past the last column).
+fn cell(r: &TelemetryRow, i: usize) -> Cell {
+    let mag = |k: usize| Cell::opt(r.mag_raw.and_then(|m| m.get(k).copied()).map(i32::from), 0);
+    let field = |k: usize| Cell::opt(r.mag_field.and_then(|m| m.get(k).copied()), 0);
     let f = &r.faults;
-    for count in [f.bus, f.timeout, f.missing, f.bad_sample, f.rejected_outliers, f.overruns] {
-        sep(out)?;
-        push_u32(out, count)?;
+    match i {
+        0 => Cell::unsigned(r.t_ms, 0),
+        1 => Cell::signed(r.x_dmm, 1),
+        2 => Cell::signed(r.y_dmm, 1),
+        3 => Cell::unsigned(r.heading_mdeg, 3),
+        4 => Cell::Word(motion_word(r.motion)),
+        5 => Cell::signed(r.v_mm_s, 3),
+        6 => Cell::signed(r.w_mrad_s, 3),
+        7 => Cell::unsigned(r.left_cmd_centi, 2),
+        8 => Cell::unsigned(r.right_cmd_centi, 2),
+        9 => Cell::opt(r.front_raw_mm.map(i32::from), 0),
+        10 => Cell::opt(r.front_dmm, 1),
+        11 => Cell::opt(r.right_raw_mm.map(i32::from), 0),
+        12 => Cell::opt(r.right_dmm, 1),
+        13..=15 => mag(i - 13),
+        16..=18 => field(i - 16),
+        19 => r.compass_mdeg.map_or(Cell::Empty, |d| Cell::unsigned(d, 3)),
+        20 => Cell::unsigned(f.bus, 0),
+        21 => Cell::unsigned(f.timeout, 0),
+        22 => Cell::unsigned(f.missing, 0),
+        23 => Cell::unsigned(f.bad_sample, 0),
+        24 => Cell::unsigned(f.rejected_outliers, 0),
+        25 => Cell::unsigned(f.overruns, 0),
+        _ => Cell::Empty,
+    }
+}
+
+/// Appends a row's values as CSV (no terminator). Column by column through
+/// [`cell`]: one loop, which keeps the robot's code and stack frame small.
+pub fn format_row(r: &TelemetryRow, out: &mut dyn TextOut) -> Result<(), Overflow> {
+    for i in 0..COLUMNS {
+        if i > 0 {
+            out.put_byte(b',')?;
+        }
+        match cell(r, i) {
+            Cell::Empty => {}
+            Cell::Word(w) => push_str(out, w)?,
+            Cell::Num(negative, magnitude, decimals) => push_fixed_parts(out, negative, magnitude, decimals)?,
+        }
     }
     Ok(())
 }
