@@ -203,7 +203,7 @@ fn cell(r: &TelemetryRow, i: usize) -> Cell {
 }
 
 /// Appends a row's values as CSV (no terminator). Column by column through
-/// [`cell`]: one loop, which keeps the robot's code and stack frame small.
+/// `cell`: one loop, which keeps the robot's code and stack frame small.
 pub fn format_row(r: &TelemetryRow, out: &mut dyn TextOut) -> Result<(), Overflow> {
     for i in 0..COLUMNS {
         if i > 0 {
