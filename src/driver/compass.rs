@@ -9,8 +9,8 @@
 //!    used), I2C master off, bypass on (INT_PIN_CFG BYPASS_EN): the AK8963
 //!    now sits on our bus at [`config::i2c::AK8963_ADDR`].
 //! 2. AK8963, directly: identity (WIA 0x48), fuse-ROM mode to read the
-//!    sensitivity adjustment (ASA), then continuous mode 2 (100 Hz) with
-//!    16-bit output.
+//!    sensitivity adjustment (ASA, read twice and compared), then
+//!    continuous mode 2 (100 Hz) with 16-bit output.
 //!
 //! Why the AK8963 is not driven through the `mpu9250` crate: its
 //! magnetometer access is private to its `Mpu9250<_, Marg>` driver, whose
@@ -159,8 +159,14 @@ impl<I2C: I2c, D: DelayNs> Compass<I2C, D> {
         }
         self.ak_mode(ak::MODE_POWER_DOWN)?;
         self.ak_mode(ak::MODE_FUSE_ROM)?;
-        let mut asa = [0u8; 3];
+        // The fuse ROM is read twice: a corrupted transfer would otherwise
+        // give a wrong sensitivity for as long as the robot runs.
+        let (mut asa, mut again) = ([0u8; 3], [0u8; 3]);
         self.ak_read(ak::ASAX, &mut asa)?;
+        self.ak_read(ak::ASAX, &mut again)?;
+        if asa != again {
+            return Err(SensorError::Bus);
+        }
         self.ak_mode(ak::MODE_POWER_DOWN)?;
         self.ak_mode(ak::MODE_CONT2_100HZ | ak::BIT_16)?;
         self.asa = asa;
