@@ -146,3 +146,22 @@ fn an_hour_of_constant_motion_does_not_drift() {
     }
     assert_close(&p, &r, 1.0, 1e-4, "an hour at 100 Hz");
 }
+
+/// The pose caches sin/cos of its heading; a heading written from outside
+/// (the estimator's correction, a pose reset) must never use a stale cache.
+#[test]
+fn heading_set_from_outside_is_honoured() {
+    let v = Motion::Straight(Speed::from_mps_f64(0.1));
+    let mut p = Pose::from_mm(0, 0, Angle::ZERO);
+    p = step(&p, v, ms(10)); // cache now holds 0 deg
+    p.theta = Angle::from_degrees_f64(90.0);
+    let q = step(&p, v, ms(10));
+    let f = PoseF::of(&q);
+    assert!((f.x - 1.0).abs() < 1e-6 && (f.y - 1.0).abs() < 1e-6, "{f:?}: moved east by 1 mm after 1 mm north");
+    // a turn after an outside change starts from the new heading too
+    let mut t = Pose::from_mm(0, 0, Angle::ZERO);
+    t = step(&t, Motion::Turn(TurnRate::from_rad_s_f64(1.0)), ms(10));
+    t.theta = Angle::from_degrees_f64(180.0);
+    let r = reference::step(PoseF::of(&t), Motion::Turn(TurnRate::from_rad_s_f64(1.0)), ms(10));
+    assert_close(&step(&t, Motion::Turn(TurnRate::from_rad_s_f64(1.0)), ms(10)), &r, 1e-5, 1e-8, "turn after reset");
+}

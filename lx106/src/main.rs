@@ -10,7 +10,6 @@
 
 mod bench;
 mod float;
-mod proposal;
 mod rt;
 mod suite;
 #[rustfmt::skip]

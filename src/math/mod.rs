@@ -73,7 +73,7 @@ pub fn div_round(n: i64, d: i64) -> Option<i64> {
     }
     let (n2, d2) = (n.saturating_mul(2), d.saturating_mul(2));
     let q = if (n < 0) == (d < 0) { n2.saturating_add(d) } else { n2.saturating_sub(d) };
-    Some(q / d2)
+    q.checked_div(d2)
 }
 
 /// Binary angle: `u32` where 2^32 is one full turn, so adding and

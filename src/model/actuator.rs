@@ -150,7 +150,7 @@ impl WheelLine {
             return (0, true); // on the other side of neutral: this line says nothing
         }
         let y_near = i64::from(self.line.eval_q16(near).max(0));
-        ((y_near * i64::from(off) / i64::from(span)) as i32, true)
+        ((y_near * i64::from(off)).checked_div(i64::from(span)).unwrap_or(0) as i32, true)
     }
 }
 
@@ -256,7 +256,7 @@ impl ActuatorModel {
     fn wheel_rate_q16(&self, v: Speed) -> i32 {
         let r = i64::from(self.wheel_radius.0.max(1));
         let mm_s_q16 = (i64::from(v.to_bits()) * 1_000_000) >> 16;
-        ((mm_s_q16 << 16) / r).clamp(0, i64::from(i32::MAX)) as i32
+        (mm_s_q16 << 16).checked_div(r).unwrap_or(0).clamp(0, i64::from(i32::MAX)) as i32
     }
     /// Car speed for a wheel speed (rad/s Q16).
     fn car_speed(&self, wheel_q16: i32) -> Speed {

@@ -12,4 +12,4 @@ pub mod state;
 
 pub use actuator::{ActuatorModel, Drive, Motion, MotionKind, ServoCmd, Trim};
 pub use lidar::{LidarModel, Range};
-pub use state::{step, Pose};
+pub use state::{advance, step, Pose};

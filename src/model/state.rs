@@ -7,56 +7,138 @@
 //!   exactly as the report writes it (D from the config).
 //! - Stop: nothing moves.
 //!
-//! Integer only: two or four [`mul_hi`] products and one or two
-//! [`sin_cos`] per step, no division, no 64-bit multiply. The heading keeps
-//! a 16-bit sub-LSB fraction, so no rounding builds up with time.
+//! Integer only: two [`mul_hi`] products and at most one [`sin_cos`] per
+//! step, no division, no 64-bit multiply. The heading keeps a 16-bit sub-LSB
+//! fraction, so no rounding builds up with time. The pose caches the sine
+//! and cosine of its heading (checked against the heading before each use,
+//! so a heading set from outside is never paired with a stale cache): a
+//! straight step then needs no `sin_cos` at all and a turn only the new one.
 
 use crate::config;
 use crate::math::{mul_hi, sin_cos, Angle, Coord, Dt, Length};
 use crate::model::actuator::Motion;
 
+/// `sin_cos(at)` and `D` times it, remembered.
+#[derive(Clone, Copy, Debug)]
+struct Trig {
+    at: Angle,
+    /// Q2.30
+    sin: i32,
+    cos: i32,
+    /// `D sin`, `D cos` in Q22 mm (|.| < 2^30 for D < 128 mm).
+    d_sin: i32,
+    d_cos: i32,
+}
+
+impl Trig {
+    #[inline(always)]
+    fn of(at: Angle) -> Trig {
+        let (sin, cos) = sin_cos(at);
+        Trig { at, sin, cos, d_sin: mul_hi(D_Q24, sin), d_cos: mul_hi(D_Q24, cos) }
+    }
+}
+
 /// Position of the car's reference point and its heading.
-#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug, Default)]
+#[derive(Clone, Copy, Debug)]
 pub struct Pose {
     pub x: Coord,
     pub y: Coord,
     pub theta: Angle,
     /// Fraction of an [`Angle`] LSB (2^-16), carried between steps.
     pub theta_frac: u16,
+    trig: Trig,
+}
+
+impl PartialEq for Pose {
+    fn eq(&self, o: &Pose) -> bool {
+        (self.x, self.y, self.theta, self.theta_frac) == (o.x, o.y, o.theta, o.theta_frac)
+    }
+}
+impl Eq for Pose {}
+
+impl core::hash::Hash for Pose {
+    fn hash<H: core::hash::Hasher>(&self, h: &mut H) {
+        (self.x, self.y, self.theta, self.theta_frac).hash(h)
+    }
+}
+
+impl Default for Pose {
+    fn default() -> Pose {
+        Pose::new(Coord::ZERO, Coord::ZERO, Angle::ZERO)
+    }
 }
 
 impl Pose {
-    pub const fn new(x: Coord, y: Coord, theta: Angle) -> Pose {
-        Pose { x, y, theta, theta_frac: 0 }
+    pub fn new(x: Coord, y: Coord, theta: Angle) -> Pose {
+        Pose { x, y, theta, theta_frac: 0, trig: Trig::of(theta) }
+    }
+    /// With a sub-LSB heading fraction (to restore a pose exactly).
+    pub fn from_parts(x: Coord, y: Coord, theta: Angle, theta_frac: u16) -> Pose {
+        Pose { theta_frac, ..Pose::new(x, y, theta) }
     }
     pub fn from_mm(x_mm: i32, y_mm: i32, theta: Angle) -> Pose {
         Pose::new(Coord::from_length(Length::from_mm(x_mm)), Coord::from_length(Length::from_mm(y_mm)), theta)
     }
+    /// `(sin theta, cos theta)` in Q2.30, from the cache when it is current.
+    #[inline(always)]
+    pub fn sin_cos(&mut self) -> (i32, i32) {
+        let t = self.trig();
+        (t.sin, t.cos)
+    }
+    #[inline(always)]
+    fn trig(&mut self) -> Trig {
+        if self.trig.at != self.theta {
+            self.trig = Trig::of(self.theta);
+        }
+        self.trig
+    }
 }
 
-/// `D` in Q24 mm (the config asserts it is below 128 mm).
+/// `D` in Q24 mm (the config asserts it is below 128 mm, so it fits).
 const D_Q24: i32 = config::geometry::ROTATION_TO_REFERENCE.0 << 8;
 
-/// Advances `pose` by `motion` held for `dt`.
+/// Adds a step in units of 2^(-32 + shift) mm. Wrapping: a coordinate wraps
+/// only after 2^31 mm = 2147 km of travel in one direction (days of driving
+/// at the robot's top speed), and a saturating i64 add costs 20 lx106
+/// instructions where this costs 4.
+#[inline(always)]
+fn add_scaled(c: Coord, step: i32, shift: u32) -> Coord {
+    Coord(c.0.wrapping_add(i64::from(step) << shift))
+}
+
+/// Advances `pose` in place by `motion` held for `dt`: the robot's path.
 #[inline(never)]
-pub fn step(pose: &Pose, motion: Motion, dt: Dt) -> Pose {
+pub fn advance(pose: &mut Pose, motion: Motion, dt: Dt) {
     match motion {
-        Motion::Stop => *pose,
+        Motion::Stop => {}
         Motion::Straight(v) => {
-            let d = v.distance_q24(dt);
-            let (s, c) = sin_cos(pose.theta);
-            Pose { x: pose.x.add_q22(mul_hi(d, c)), y: pose.y.add_q22(mul_hi(d, s)), ..*pose }
+            let d = v.distance_q24(dt); // Q24 mm, |d| < 2^30
+            let (s, c) = pose.sin_cos();
+            // Q24 * Q30 / 2^32 = Q22
+            pose.x = add_scaled(pose.x, mul_hi(d, c), 10);
+            pose.y = add_scaled(pose.y, mul_hi(d, s), 10);
         }
         Motion::Turn(w) => {
             let (rot, frac) = w.rotation(dt);
             let (f, carry) = pose.theta_frac.overflowing_add(frac);
             let theta = pose.theta.wrapping_add(rot).wrapping_add(Angle(u32::from(carry)));
-            let (s0, c0) = sin_cos(pose.theta);
-            let (s1, c1) = sin_cos(theta);
-            // each product is at most D = 2^31 / 2^8 in Q22: the differences fit
-            let dx = mul_hi(D_Q24, c1) - mul_hi(D_Q24, c0);
-            let dy = mul_hi(D_Q24, s0) - mul_hi(D_Q24, s1);
-            Pose { x: pose.x.add_q22(dx), y: pose.y.add_q22(dy), theta, theta_frac: f }
+            let t0 = pose.trig();
+            let t1 = Trig::of(theta);
+            // Q22 differences of values below 2^30: no overflow. The products
+            // of one step's new heading are the next step's old ones, so a
+            // turn telescopes exactly: no rounding builds up.
+            pose.x = add_scaled(pose.x, t1.d_cos - t0.d_cos, 10);
+            pose.y = add_scaled(pose.y, t0.d_sin - t1.d_sin, 10);
+            pose.theta = theta;
+            pose.theta_frac = f;
+            pose.trig = t1;
         }
     }
+}
+
+/// Returns `pose` advanced by `motion` held for `dt` (a copy; see [`advance`]).
+pub fn step(pose: &Pose, motion: Motion, dt: Dt) -> Pose {
+    let mut p = *pose;
+    advance(&mut p, motion, dt);
+    p
 }

@@ -12,7 +12,6 @@ pub const TESTS: &[Test] = &[
     ("step_vectors", step_vectors),
     ("step_sequences_no_drift", step_sequences),
     ("zero_dt_moves_nothing", zero_dt),
-    ("proposal_matches_vectors", proposal_matches_vectors),
 ];
 
 /// One step's position error bound: sin/cos 2e-7 times D = 56 mm (twice for
@@ -36,16 +35,11 @@ fn step_vectors() -> TestResult {
     vectors_with(step, "")
 }
 
-/// The benchmark-only variant in `src/proposal.rs` passes the same vectors.
-fn proposal_matches_vectors() -> TestResult {
-    vectors_with(crate::proposal::step, "(proposal) ")
-}
-
 fn vectors_with(step: fn(&Pose, Motion, Dt) -> Pose, who: &str) -> TestResult {
     let mut m = Mismatches::new();
     let mut worst = 0i64;
     for (i, v) in STEP.iter().enumerate() {
-        let p = Pose { x: Coord(v.x), y: Coord(v.y), theta: Angle(v.theta), theta_frac: v.frac };
+        let p = Pose::from_parts(Coord(v.x), Coord(v.y), Angle(v.theta), v.frac);
         let q = step(black_box(&p), black_box(motion(v.motion)), black_box(dt(v.dt_us)));
         let (ex, ey) = ((q.x.0 - v.exp_x).abs(), (q.y.0 - v.exp_y).abs());
         worst = worst.max(ex).max(ey);
@@ -102,7 +96,7 @@ fn step_sequences() -> TestResult {
 }
 
 fn zero_dt() -> TestResult {
-    let p = Pose { x: Coord(123_456_789_012), y: Coord(-42), theta: Angle(0x1234_5678), theta_frac: 0xabcd };
+    let p = Pose::from_parts(Coord(123_456_789_012), Coord(-42), Angle(0x1234_5678), 0xabcd);
     for mv in [Mv::Stop, Mv::Straight(Speed::MAX.to_bits()), Mv::Turn(TurnRate::MAX.to_bits()), Mv::Turn(-1)] {
         check(step(black_box(&p), motion(mv), dt(black_box(0))) == p, "a zero time step moved the pose")?;
     }
