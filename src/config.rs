@@ -223,6 +223,18 @@ pub mod i2c {
     pub const FREQUENCY_HZ: u32 = 400_000;
     /// Longest a slave may stretch the clock before the transfer fails, us.
     pub const CLOCK_STRETCH_TIMEOUT_US: u32 = 1_000;
+    /// Shortest SCL low phase, ns: fast mode tLOW >= 1.3 us (I2C spec
+    /// UM10204 table 10). The bit-banged master makes the low phase at least
+    /// this long and gives the rest of the bit period to the high phase.
+    pub const T_LOW_MIN_NS: u32 = 1_300;
+    /// Shortest SCL high phase, ns: fast mode tHIGH >= 0.6 us (UM10204 table 10).
+    pub const T_HIGH_MIN_NS: u32 = 600;
+    /// Bus-free time between a STOP and the next START, ns: fast mode
+    /// tBUF >= 1.3 us (UM10204 table 10).
+    pub const T_BUF_MIN_NS: u32 = 1_300;
+    /// Clock pulses sent to free a slave that holds SDA low (UM10204 3.1.16:
+    /// nine clocks, then STOP).
+    pub const RECOVERY_CLOCKS: u8 = 9;
 }
 
 /// Timing of the control loop.
@@ -283,6 +295,34 @@ pub mod serial {
     /// about 100 bytes, 10 kB/s at 100 Hz against the UART's 11.5 kB/s
     /// (115200 baud, 10 bits a byte): rates near the maximum only fit short rows.
     pub const MAX_TELEMETRY_HZ: u16 = super::timing::LOOP_HZ as u16;
+}
+
+/// The ESP8266 itself: clocks, the servo timer and the watchdog (used by
+/// `board`; the numbers are the chip's, from the ESP8266 Technical Reference).
+pub mod board {
+    /// CPU clock, Hz: the ESP8266 runs at 80 MHz after the HAL's PLL setup;
+    /// CCOUNT counts CPU cycles.
+    pub const CPU_HZ: u32 = 80_000_000;
+    /// APB clock that feeds UART0 and FRC1, Hz (80 MHz, Technical Reference 11.3).
+    pub const APB_HZ: u32 = 80_000_000;
+    /// FRC1 prescaler for the servo pulses: 16, so one tick is 0.2 us
+    /// (5 ticks per us) and the 23-bit counter spans 1.67 s.
+    pub const FRC1_PRESCALER: u32 = 16;
+    /// The FRC1 interrupt is raised this long before each servo edge; the
+    /// handler then spins on CCOUNT to the exact cycle, so any interrupt latency below
+    /// this does not move the edge, us. 20 us covers the vector entry and a
+    /// flash-cache miss in another interrupt (a few us) with margin.
+    pub const SERVO_EDGE_GUARD_US: u32 = 20;
+    /// The right servo's pulse starts this long after the left one's, us:
+    /// the pulses never overlap (max pulse 2300 us) and the two servos'
+    /// current surges are apart.
+    pub const SERVO_STAGGER_US: u32 = 2_600;
+    /// Hardware watchdog timeout, ms: the loop (100 Hz) feeds it every tick.
+    pub const WATCHDOG_MS: u32 = 1_680;
+    /// LED heartbeat: half period while running normally, ms.
+    pub const LED_BLINK_OK_MS: u32 = 500;
+    /// LED half period while the robot is stopped by a fault, ms.
+    pub const LED_BLINK_FAULT_MS: u32 = 100;
 }
 
 /// The test arena: a box, origin at a corner, x along the long side (north),

@@ -1,1 +1,26 @@
-//! placeholder
+//! The ESP8266 board layer: what turns the control loop into firmware.
+//!
+//! Everything that can be reasoned about without the chip is here, compiled
+//! and tested on every target:
+//! - [`bitbang_i2c`]: the I2C master (embedded-hal 1.0 `I2c`) over two
+//!   open-drain GPIOs, fast mode, clock stretching, bus recovery;
+//! - [`servo_pulse`]: the FRC1 servo-pulse schedule (latency-independent
+//!   edges) and the CAS-free loop-to-interrupt handoff of pulse widths;
+//! - [`uart`]: the UART0 baud divider;
+//! - `sim_wire` (tests and the `sim` feature): a wire-level simulated I2C bus
+//!   with register-file slaves, to test the master edge by edge.
+//!
+//! The chip glue, [`esp8266`](self) (`esp8266.rs`), exists only for
+//! `target_arch = "xtensa"` with the `board` feature: esp8266-hal pins as
+//! [`bitbang_i2c::I2cPins`], the FRC1 interrupt, UART0, watchdog, LED and the
+//! panic handler. The firmware binary is `src/bin/firmware.rs`.
+
+pub mod bitbang_i2c;
+pub mod servo_pulse;
+pub mod uart;
+
+#[cfg(any(test, feature = "sim"))]
+pub mod sim_wire;
+
+#[cfg(all(target_arch = "xtensa", feature = "board"))]
+pub mod esp8266;

@@ -1,0 +1,108 @@
+//! The paperbot firmware for the ESP8266 (`xtensa-esp8266-none-elf`).
+//!
+//! Build and flash with the esp toolchain (see README):
+//! `cargo +esp fw-flash` (= `cargo +esp run --release --features firmware
+//! --target xtensa-esp8266-none-elf --bin firmware`). It needs the
+//! non-default `firmware` feature, so host `cargo test` / `clippy
+//! --all-targets` never build it; on a non-xtensa target it is a stub.
+//!
+//! Boot: board bring-up (UART0 115200, pins, servo interrupt with pulses
+//! off, I2C bus recovery), the two lidars (XSHUT sequence, new addresses),
+//! the compass; then [`run`]: the control loop at `config::timing::LOOP_HZ`
+//! fed by UART0, the watchdog fed every pass, the LED blinking the state.
+#![cfg_attr(target_arch = "xtensa", no_std, no_main)]
+
+#[cfg(not(target_arch = "xtensa"))]
+fn main() {
+    eprintln!("paperbot firmware: build it for xtensa-esp8266-none-elf with the esp toolchain (see README)");
+}
+
+#[cfg(target_arch = "xtensa")]
+mod robot {
+    use core::cell::RefCell;
+    use core::fmt::Write as _;
+
+    use embedded_hal_02::serial::Read as _;
+    use esp8266_hal::ehal::watchdog::Watchdog as _;
+    use esp8266_hal::entry;
+    use esp8266_hal::uart::UART0Serial;
+
+    use paperbot::board::esp8266::{start_watchdog, Board, I2cBus, MicrosClock};
+    use paperbot::config;
+    use paperbot::control::tick::{Controller, LineSink, TICK_US};
+    use paperbot::driver::bus::SharedI2c;
+    use paperbot::driver::compass::Compass;
+    use paperbot::driver::lidar::{bring_up, Lidar};
+    use paperbot::driver::servo::ServoPair;
+    use paperbot::driver::HeadingSensor as _;
+    use paperbot::math::Angle;
+    use paperbot::model::Pose;
+
+    /// Telemetry and replies go out on UART0, one line each, CR LF.
+    struct UartLines<'a>(&'a mut UART0Serial);
+
+    impl LineSink for UartLines<'_> {
+        fn write_line(&mut self, line: &str) {
+            // Blocking on the 128-byte FIFO; the HAL's error type is Void.
+            let _ = self.0.write_str(line);
+            let _ = self.0.write_str("\r\n");
+        }
+    }
+
+    #[entry]
+    fn main() -> ! {
+        let Some(board) = Board::take() else {
+            // Only reachable if main ran twice; nothing sensible to do.
+            panic!("peripherals already taken");
+        };
+        run(board)
+    }
+
+    /// All hardware is created by [`Board::take`] and handed over here.
+    fn run(b: Board) -> ! {
+        let Board { mut i2c, servo_timer, mut serial, mut watchdog, mut led, front_xshut, right_xshut, delay } = b;
+        let _ = writeln!(serial, "\r\npaperbot {} up", env!("CARGO_PKG_VERSION"));
+        if let Err(e) = i2c.init() {
+            let _ = writeln!(serial, "!i2c bus stuck: {:?}", e);
+        }
+
+        // One bit-banged bus, shared by the three chips from the main loop only.
+        let bus: RefCell<I2cBus> = RefCell::new(i2c);
+        let mut front = Lidar::front(SharedI2c::new(&bus), front_xshut, delay);
+        let mut right = Lidar::right(SharedI2c::new(&bus), right_xshut, delay);
+        let up = bring_up(&mut front, &mut right);
+        let mut compass = Compass::with_config(SharedI2c::new(&bus), delay);
+        let compass_up = compass.reinit();
+        let _ = writeln!(serial, "lidars {:?} {:?}, compass {:?}", up.front, up.right, compass_up);
+
+        let servos = ServoPair::with_config(servo_timer.output());
+        let mut ctl = Controller::new(front, right, compass, servos, Pose::from_mm(0, 0, Angle::ZERO));
+
+        let mut clock = MicrosClock::new();
+        let mut last_tick = clock.now_us();
+        let mut last_blink = last_tick;
+        start_watchdog(&mut watchdog);
+        loop {
+            watchdog.feed();
+            let now = clock.now_us();
+
+            // Commands: every byte waiting in the RX FIFO.
+            while let Ok(byte) = serial.read() {
+                ctl.feed(byte, &mut UartLines(&mut serial));
+            }
+
+            if now.wrapping_sub(last_tick) >= TICK_US {
+                last_tick = now;
+                ctl.tick(now, &mut UartLines(&mut serial));
+            }
+
+            // LED: slow blink when every sensor is up, fast when one is down.
+            let healthy = ctl.front_health().up && ctl.right_health().up && ctl.compass_health().up;
+            let half_ms = if healthy { config::board::LED_BLINK_OK_MS } else { config::board::LED_BLINK_FAULT_MS };
+            if now.wrapping_sub(last_blink) >= half_ms.saturating_mul(1_000) {
+                last_blink = now;
+                led.toggle();
+            }
+        }
+    }
+}

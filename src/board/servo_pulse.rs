@@ -1,0 +1,614 @@
+//! Servo pulses from the FRC1 timer interrupt: the scheduling arithmetic and
+//! the loop-to-interrupt handoff, independent of the chip.
+//!
+//! # Frame
+//! Every 20 ms frame ([`config::servo::FRAME_US`]) has four edges, each
+//! driven by one FRC1 interrupt:
+//!
+//! ```text
+//! t = 0            left pin high        (widths for the frame latched here)
+//! t = wL           left pin low
+//! t = S            right pin high       (S = config::board::SERVO_STAGGER_US)
+//! t = S + wR       right pin low
+//! t = FRAME        next frame
+//! ```
+//!
+//! # Latency independence
+//! Edge times are absolute CCOUNT values (the lx106's free-running 80 MHz
+//! cycle counter): each edge is exactly its interval after the previous
+//! *planned* edge, so errors never accumulate. FRC1 (a 23-bit down counter
+//! at 80 MHz / 16) only raises the interrupt [`GUARD_CYCLES`] *before* an
+//! edge; the handler then spins on CCOUNT until the edge's cycle and only
+//! then writes the pin. Any interrupt latency below the guard therefore moves
+//! no edge: an edge lands within one CCOUNT poll (a few cycles, < 0.1 us) of
+//! its planned cycle. The FRC1 alarm itself may be off by a tick or two (it
+//! is programmed by writing `FRC1_LOAD`, which restarts the counter); that
+//! only eats into the guard.
+//!
+//! If the latency ever exceeds the guard (interrupts masked for > 20 us), the
+//! edge is late; the schedule re-anchors on the real edge, so a late rising
+//! edge still gives an exact pulse width (a late falling edge lengthens that
+//! one pulse by its lateness). Such edges are counted in
+//! [`PulseScheduler::late_edges`].
+//!
+//! # Handoff without CAS
+//! The ESP8266 has no compare-and-swap (atomics are load/store only). Both
+//! widths fit in one `AtomicU32` ([`PulseMailbox`]): the loop stores the pair
+//! with one store, the interrupt loads it with one load at the start of each
+//! frame, so the pair is never torn and a frame never mixes old and new
+//! widths. One writer (the loop) and one reader (the ISR): no read-modify-write
+//! is ever needed.
+//!
+//! # Interface to the servo driver
+//! The driver maps commands to [`PulseWidthUs`] and hands both to a
+//! [`PulseOutput`] (implemented by [`ServoPulses`], a handle on the mailbox).
+//! Widths are clamped to [`config::servo::SAFE_MIN_US`]..=`SAFE_MAX_US` on the
+//! way in and again when the frame is latched; [`PulseWidthUs::OFF`] (0)
+//! keeps that pin low (no pulses: the FS90R stands still).
+
+use core::sync::atomic::{AtomicU32, Ordering};
+
+use crate::config;
+
+/// CPU cycles (CCOUNT counts) per microsecond: 80.
+pub const CYCLES_PER_US: u32 = config::board::CPU_HZ / 1_000_000;
+/// CPU cycles per FRC1 tick: the timer runs at APB / prescaler = 5 MHz, 16 cycles.
+pub const CYCLES_PER_TICK: u32 = config::board::CPU_HZ / (config::board::APB_HZ / config::board::FRC1_PRESCALER);
+/// The FRC1 counter is 23 bits wide.
+pub const FRC1_MAX: u32 = (1 << 23) - 1;
+/// The alarm comes this many cycles before its edge.
+pub const GUARD_CYCLES: u32 = config::board::SERVO_EDGE_GUARD_US * CYCLES_PER_US;
+/// One frame, cycles.
+pub const FRAME_CYCLES: u32 = config::servo::FRAME_US * CYCLES_PER_US;
+/// Rising edge of the right pulse after the left one, cycles.
+pub const STAGGER_CYCLES: u32 = config::board::SERVO_STAGGER_US * CYCLES_PER_US;
+/// Smallest value ever written to FRC1_LOAD (1 tick): a late schedule fires
+/// as soon as possible.
+pub const MIN_LOAD_TICKS: u32 = 1;
+/// Delay from [`PulseScheduler::start`] to the first edge, cycles (1 ms).
+pub const START_DELAY_CYCLES: u32 = 1_000 * CYCLES_PER_US;
+/// An edge made more than this after its planned cycle counts as late (the
+/// interrupt came after the guard), cycles: two CCOUNT polls of slack.
+pub const LATE_SLACK_CYCLES: u32 = 16;
+/// Worst-case time the handler needs after an edge before the next alarm
+/// may come (entry + spin exit + bookkeeping, a few us in IRAM), us; only
+/// used to check the configuration below.
+pub const HANDLER_US: u32 = 30;
+
+// Whole cycles per tick and per us, and every interval between edges leaves
+// room for the guard and one handler run.
+const _: () = {
+    assert!(CYCLES_PER_US * 1_000_000 == config::board::CPU_HZ);
+    assert!(CYCLES_PER_TICK * (config::board::APB_HZ / config::board::FRC1_PRESCALER) == config::board::CPU_HZ);
+    assert!(config::servo::SAFE_MIN_US <= config::servo::SAFE_MAX_US);
+    assert!(config::servo::SAFE_MAX_US <= u16::MAX as u32);
+    let need = config::board::SERVO_EDGE_GUARD_US + HANDLER_US;
+    // left rise -> left fall, right rise -> right fall
+    assert!(config::servo::SAFE_MIN_US >= need);
+    // left fall -> right rise
+    assert!(config::board::SERVO_STAGGER_US >= config::servo::SAFE_MAX_US + need);
+    // right fall -> next frame's left rise
+    assert!(config::servo::FRAME_US >= config::board::SERVO_STAGGER_US + config::servo::SAFE_MAX_US + need);
+    // the longest wait fits in FRC1, and every cycle difference in an i32
+    assert!(FRAME_CYCLES / CYCLES_PER_TICK <= FRC1_MAX);
+    assert!(FRAME_CYCLES < i32::MAX as u32);
+    assert!(START_DELAY_CYCLES > GUARD_CYCLES);
+};
+
+/// A servo pulse width in microseconds; 0 means no pulses on that pin.
+#[derive(Clone, Copy, PartialEq, Eq, Debug, Default)]
+pub struct PulseWidthUs(pub u16);
+
+impl PulseWidthUs {
+    /// No pulses: the pin stays low.
+    pub const OFF: Self = Self(0);
+
+    /// `us` clamped to the servo's safe window ([`config::servo::SAFE_MIN_US`]
+    /// ..= [`config::servo::SAFE_MAX_US`]); 0 stays [`Self::OFF`].
+    pub const fn safe(us: u32) -> Self {
+        if us == 0 {
+            return Self::OFF;
+        }
+        let c = if us < config::servo::SAFE_MIN_US {
+            config::servo::SAFE_MIN_US
+        } else if us > config::servo::SAFE_MAX_US {
+            config::servo::SAFE_MAX_US
+        } else {
+            us
+        };
+        // c <= SAFE_MAX_US <= u16::MAX (asserted above)
+        Self(c as u16)
+    }
+
+    pub const fn is_off(self) -> bool {
+        self.0 == 0
+    }
+
+    /// The width in CPU cycles after clamping (0 for OFF). At most
+    /// SAFE_MAX_US * 80, no overflow.
+    pub const fn cycles(self) -> u32 {
+        Self::safe(self.0 as u32).0 as u32 * CYCLES_PER_US
+    }
+}
+
+/// Where the servo driver sends pulse widths.
+pub trait PulseOutput {
+    /// Both widths, applied together from the next frame on.
+    fn set_widths(&mut self, left: PulseWidthUs, right: PulseWidthUs);
+}
+
+/// The loop-to-interrupt mailbox: both widths in one 32-bit word (left in
+/// the high half), written with a single store and read with a single load.
+pub struct PulseMailbox {
+    word: AtomicU32,
+}
+
+impl PulseMailbox {
+    /// Both servos off.
+    pub const fn new() -> Self {
+        Self { word: AtomicU32::new(0) }
+    }
+
+    /// Publishes both widths (clamped) in one store. Called by the loop.
+    pub fn publish(&self, left: PulseWidthUs, right: PulseWidthUs) {
+        let l = PulseWidthUs::safe(u32::from(left.0)).0;
+        let r = PulseWidthUs::safe(u32::from(right.0)).0;
+        self.word.store(u32::from(l) << 16 | u32::from(r), Ordering::Release);
+    }
+
+    /// The newest pair (left, right) in one load. Called by the interrupt.
+    #[inline(always)]
+    pub fn latest(&self) -> (PulseWidthUs, PulseWidthUs) {
+        let w = self.word.load(Ordering::Acquire);
+        (PulseWidthUs((w >> 16) as u16), PulseWidthUs(w as u16))
+    }
+}
+
+impl Default for PulseMailbox {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// The loop's handle on the mailbox.
+pub struct ServoPulses<'a> {
+    mailbox: &'a PulseMailbox,
+}
+
+impl<'a> ServoPulses<'a> {
+    pub const fn new(mailbox: &'a PulseMailbox) -> Self {
+        Self { mailbox }
+    }
+}
+
+impl PulseOutput for ServoPulses<'_> {
+    fn set_widths(&mut self, left: PulseWidthUs, right: PulseWidthUs) {
+        self.mailbox.publish(left, right);
+    }
+}
+
+/// Which servo pin an edge is on.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub enum Channel {
+    Left,
+    Right,
+}
+
+/// The four edges of a frame, in order.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub enum Phase {
+    LeftRise,
+    LeftFall,
+    RightRise,
+    RightFall,
+}
+
+impl Phase {
+    const fn next(self) -> Self {
+        match self {
+            Phase::LeftRise => Phase::LeftFall,
+            Phase::LeftFall => Phase::RightRise,
+            Phase::RightRise => Phase::RightFall,
+            Phase::RightFall => Phase::LeftRise,
+        }
+    }
+}
+
+/// One planned edge: which pin, which level, and the time to the next edge.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub struct PlannedEdge {
+    pub channel: Channel,
+    pub high: bool,
+    /// Cycles from this edge to the next one.
+    pub interval: u32,
+}
+
+/// The widths of one frame, in cycles (0 = off), latched at its first edge.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub struct FramePlan {
+    left: u32,
+    right: u32,
+}
+
+impl FramePlan {
+    pub const fn new(left: PulseWidthUs, right: PulseWidthUs) -> Self {
+        Self { left: left.cycles(), right: right.cycles() }
+    }
+
+    /// The edge of `phase`. An OFF channel gets its "fall" at the shortest
+    /// width with both edges low, so the frame keeps its shape.
+    /// Intervals: each >= SAFE_MIN_US or >= STAGGER - SAFE_MAX, and they sum
+    /// to FRAME_CYCLES (no underflow: the config asserts above).
+    pub const fn edge(&self, phase: Phase) -> PlannedEdge {
+        const MIN: u32 = config::servo::SAFE_MIN_US * CYCLES_PER_US;
+        let l = if self.left == 0 { MIN } else { self.left };
+        let r = if self.right == 0 { MIN } else { self.right };
+        match phase {
+            Phase::LeftRise => PlannedEdge { channel: Channel::Left, high: self.left != 0, interval: l },
+            Phase::LeftFall => PlannedEdge { channel: Channel::Left, high: false, interval: STAGGER_CYCLES - l },
+            Phase::RightRise => PlannedEdge { channel: Channel::Right, high: self.right != 0, interval: r },
+            Phase::RightFall => {
+                PlannedEdge { channel: Channel::Right, high: false, interval: FRAME_CYCLES - STAGGER_CYCLES - r }
+            }
+        }
+    }
+}
+
+/// What the interrupt handler needs from the chip.
+pub trait PulseTimer {
+    /// CCOUNT: the free-running CPU cycle counter (wraps every 53 s).
+    fn cycles(&mut self) -> u32;
+    /// Writes FRC1_LOAD: the counter restarts from `ticks` at once and
+    /// raises the interrupt when it reaches zero.
+    fn load(&mut self, ticks: u32);
+    fn set_pin(&mut self, channel: Channel, high: bool);
+}
+
+/// The interrupt side: which edge comes next and when. Owned by the FRC1
+/// handler alone.
+#[derive(Debug)]
+pub struct PulseScheduler {
+    phase: Phase,
+    plan: FramePlan,
+    /// CCOUNT of the next edge.
+    target: u32,
+    late_edges: u32,
+    frames: u32,
+}
+
+impl PulseScheduler {
+    pub const fn new() -> Self {
+        Self { phase: Phase::LeftRise, plan: FramePlan { left: 0, right: 0 }, target: 0, late_edges: 0, frames: 0 }
+    }
+
+    /// Pins low and the first alarm armed; the first frame starts
+    /// [`START_DELAY_CYCLES`] from now.
+    pub fn start<T: PulseTimer>(&mut self, hw: &mut T) {
+        hw.set_pin(Channel::Left, false);
+        hw.set_pin(Channel::Right, false);
+        self.phase = Phase::LeftRise;
+        self.target = hw.cycles().wrapping_add(START_DELAY_CYCLES);
+        hw.load((START_DELAY_CYCLES - GUARD_CYCLES) / CYCLES_PER_TICK);
+    }
+
+    /// The FRC1 interrupt: makes the due edge at its exact cycle and arms the
+    /// alarm for the next one. Inlined so the whole handler sits in IRAM.
+    #[inline(always)]
+    pub fn on_alarm<T: PulseTimer>(&mut self, hw: &mut T, mailbox: &PulseMailbox) {
+        if self.phase == Phase::LeftRise {
+            let (l, r) = mailbox.latest();
+            self.plan = FramePlan::new(l, r);
+            self.frames = self.frames.wrapping_add(1);
+        }
+        let edge = self.plan.edge(self.phase);
+        // Spin to the edge's cycle. Differences are taken as i32: the target
+        // is never more than one frame (1.6e6 cycles) away.
+        let mut late = hw.cycles().wrapping_sub(self.target) as i32;
+        while late < 0 {
+            late = hw.cycles().wrapping_sub(self.target) as i32;
+        }
+        hw.set_pin(edge.channel, edge.high);
+        // late >= 0 here.
+        let late = late as u32;
+        if late > LATE_SLACK_CYCLES {
+            // The interrupt came after the guard: re-anchor on the real edge.
+            self.late_edges = self.late_edges.wrapping_add(1);
+            self.target = self.target.wrapping_add(late);
+        }
+        self.target = self.target.wrapping_add(edge.interval);
+        // Alarm GUARD_CYCLES before the next edge (rounded down to a tick:
+        // early, never late).
+        let until_alarm = self.target.wrapping_sub(GUARD_CYCLES).wrapping_sub(hw.cycles()) as i32;
+        let ticks = if until_alarm > 0 { until_alarm as u32 / CYCLES_PER_TICK } else { 0 };
+        hw.load(ticks.clamp(MIN_LOAD_TICKS, FRC1_MAX));
+        self.phase = self.phase.next();
+    }
+
+    /// Edges made later than [`LATE_SLACK_CYCLES`] after their cycle
+    /// (interrupt latency above the guard).
+    pub const fn late_edges(&self) -> u32 {
+        self.late_edges
+    }
+
+    /// Frames started.
+    pub const fn frames(&self) -> u32 {
+        self.frames
+    }
+
+    pub const fn phase(&self) -> Phase {
+        self.phase
+    }
+}
+
+impl Default for PulseScheduler {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    extern crate std;
+    use std::vec::Vec;
+
+    const CYCLES_PER_US_64: u64 = CYCLES_PER_US as u64;
+
+    /// The chip as the handler sees it: CCOUNT, FRC1 as a one-shot alarm
+    /// that counts on the 5 MHz tick grid, and the two pins. Time runs in
+    /// CPU cycles; every access costs cycles like on the chip (CCOUNT poll 3,
+    /// an FRC1 or GPIO register access taken as 10).
+    struct SimChip {
+        now: u64,
+        alarm_at: u64,
+        pins: [bool; 2],
+        edges: Vec<(u64, Channel, bool)>,
+    }
+
+    impl SimChip {
+        fn new() -> Self {
+            Self { now: 0, alarm_at: 0, pins: [false; 2], edges: Vec::new() }
+        }
+    }
+
+    impl PulseTimer for SimChip {
+        fn cycles(&mut self) -> u32 {
+            self.now += 3;
+            self.now as u32
+        }
+        fn load(&mut self, ticks: u32) {
+            self.now += 10;
+            assert!(ticks > 0 && ticks <= FRC1_MAX);
+            // the counter decrements on the free-running tick grid
+            let tick = u64::from(CYCLES_PER_TICK);
+            self.alarm_at = (self.now / tick + u64::from(ticks)) * tick;
+        }
+        fn set_pin(&mut self, channel: Channel, high: bool) {
+            self.now += 10;
+            let i = match channel {
+                Channel::Left => 0,
+                Channel::Right => 1,
+            };
+            if self.pins[i] != high {
+                self.pins[i] = high;
+                self.edges.push((self.now, channel, high));
+            }
+        }
+    }
+
+    /// xorshift, for repeatable pseudo-random latencies.
+    struct Rng(u32);
+    impl Rng {
+        fn next(&mut self) -> u32 {
+            self.0 ^= self.0 << 13;
+            self.0 ^= self.0 >> 17;
+            self.0 ^= self.0 << 5;
+            self.0
+        }
+    }
+
+    /// Runs `alarms` interrupts, each entered `latency(i)` cycles after its
+    /// alarm, with `widths(i)` published before alarm i.
+    fn run(
+        alarms: usize,
+        mut latency: impl FnMut(usize) -> u64,
+        mut widths: impl FnMut(usize) -> Option<(u16, u16)>,
+    ) -> (SimChip, PulseScheduler) {
+        let mut hw = SimChip::new();
+        let mailbox = PulseMailbox::new();
+        let mut s = PulseScheduler::new();
+        s.start(&mut hw);
+        for i in 0..alarms {
+            if let Some((l, r)) = widths(i) {
+                mailbox.publish(PulseWidthUs(l), PulseWidthUs(r));
+            }
+            assert!(hw.alarm_at >= hw.now, "alarm in the past");
+            hw.now = hw.alarm_at + latency(i);
+            s.on_alarm(&mut hw, &mailbox);
+        }
+        (hw, s)
+    }
+
+    /// (rise, fall) cycle pairs for one channel.
+    fn pulses(hw: &SimChip, ch: Channel) -> Vec<(u64, u64)> {
+        let e: Vec<_> = hw.edges.iter().filter(|e| e.1 == ch).collect();
+        e.chunks(2)
+            .filter(|p| p.len() == 2)
+            .map(|p| {
+                assert!(p[0].2 && !p[1].2, "edges alternate");
+                (p[0].0, p[1].0)
+            })
+            .collect()
+    }
+
+    /// Edge error allowed: one CCOUNT poll (the pin write follows the first
+    /// poll that sees the edge's cycle).
+    const TOLERANCE_CYCLES: i64 = 3;
+
+    #[test]
+    fn widths_are_exact_whatever_the_latency_below_the_guard() {
+        let guard_cycles = u64::from(GUARD_CYCLES);
+        // Table: (left us, right us, latency pattern)
+        let table: &[(u16, u16, u64)] =
+            &[(1500, 1500, 0), (700, 2300, 1), (2300, 700, 2), (1200, 1800, 3), (544, 2400, 2), (1000, 2000, 3)];
+        for &(l, r, pattern) in table {
+            let mut rng = Rng(0x1234_5678 + pattern as u32);
+            let latency = |_| match pattern {
+                0 => 0,
+                1 => guard_cycles - 40,
+                _ => u64::from(rng.next()) % (guard_cycles - 40),
+            };
+            let (hw, s) = run(4 * 50, latency, |i| (i == 0).then_some((l, r)));
+            assert_eq!(s.late_edges(), 0);
+            let (lw, rw) = (PulseWidthUs::safe(l.into()), PulseWidthUs::safe(r.into()));
+            for (ch, w) in [(Channel::Left, lw), (Channel::Right, rw)] {
+                let p = pulses(&hw, ch);
+                assert_eq!(p.len(), 50, "{ch:?}");
+                for &(rise, fall) in &p {
+                    let err = (fall - rise) as i64 - i64::from(w.0) * CYCLES_PER_US as i64;
+                    assert!(err.abs() <= TOLERANCE_CYCLES, "{l}/{r} p{pattern} {ch:?}: err {err} cycles");
+                }
+                // frames: rise to rise = 20 ms within the same tolerance
+                for w2 in p.windows(2) {
+                    let err = (w2[1].0 - w2[0].0) as i64 - i64::from(config::servo::FRAME_US) * CYCLES_PER_US as i64;
+                    assert!(err.abs() <= TOLERANCE_CYCLES, "frame err {err}");
+                }
+            }
+            // stagger: right rises S after left
+            let (pl, pr) = (pulses(&hw, Channel::Left), pulses(&hw, Channel::Right));
+            for (a, b) in pl.iter().zip(&pr) {
+                let err = (b.0 - a.0) as i64 - i64::from(config::board::SERVO_STAGGER_US) * CYCLES_PER_US as i64;
+                assert!(err.abs() <= TOLERANCE_CYCLES, "stagger err {err}");
+            }
+        }
+    }
+
+    #[test]
+    fn no_drift_over_many_frames() {
+        // 500 frames = 10 s: the frame grid stays put (errors do not add up).
+        let mut rng = Rng(99);
+        let (hw, _) = run(4 * 500, |_| u64::from(rng.next() % 1_500), |i| (i == 0).then_some((1500, 1500)));
+        let p = pulses(&hw, Channel::Left);
+        let first = p[0].0 as i64;
+        let last = p[p.len() - 1].0 as i64;
+        let want = (p.len() as i64 - 1) * i64::from(config::servo::FRAME_US) * CYCLES_PER_US as i64;
+        assert!((last - first - want).abs() <= TOLERANCE_CYCLES, "drift {}", last - first - want);
+    }
+
+    #[test]
+    fn a_late_rising_edge_keeps_its_width_and_is_counted() {
+        let guard_cycles = u64::from(GUARD_CYCLES);
+        // The 9th alarm (frame 2's left rise) comes 50 us late.
+        let (hw, s) = run(
+            4 * 4,
+            |i| if i == 8 { guard_cycles + 50 * CYCLES_PER_US_64 } else { 0 },
+            |i| (i == 0).then_some((1300, 1700)),
+        );
+        assert_eq!(s.late_edges(), 1);
+        for &(rise, fall) in &pulses(&hw, Channel::Left) {
+            let err = (fall - rise) as i64 - 1300 * CYCLES_PER_US as i64;
+            assert!(err.abs() <= TOLERANCE_CYCLES, "err {err}");
+        }
+    }
+
+    #[test]
+    fn new_widths_apply_at_the_next_frame_start_never_mid_frame() {
+        // Alarm 1 (left fall) and 3 (right fall): publish between the edges
+        // of frame 0; frame 0 keeps 1000/1000, frame 1 gets 2000/1800.
+        let (hw, _) = run(
+            4 * 3,
+            |_| 0,
+            |i| match i {
+                0 => Some((1000, 1000)),
+                1 => Some((2000, 1800)),
+                _ => None,
+            },
+        );
+        let want = [(1000, 1000), (2000, 1800), (2000, 1800)];
+        let (pl, pr) = (pulses(&hw, Channel::Left), pulses(&hw, Channel::Right));
+        for (f, &(l, r)) in want.iter().enumerate() {
+            for (p, w) in [(pl[f], l), (pr[f], r)] {
+                let err = (p.1 - p.0) as i64 - w * CYCLES_PER_US as i64;
+                assert!(err.abs() <= TOLERANCE_CYCLES, "frame {f}: err {err}");
+            }
+        }
+    }
+
+    #[test]
+    fn off_channel_stays_low_and_the_other_keeps_its_timing() {
+        let (hw, s) = run(4 * 5, |_| 0, |i| (i == 0).then_some((0, 1500)));
+        assert!(pulses(&hw, Channel::Left).is_empty());
+        assert!(hw.edges.iter().all(|e| e.1 == Channel::Right));
+        let pr = pulses(&hw, Channel::Right);
+        assert_eq!(pr.len(), 5);
+        for w in pr.windows(2) {
+            let err = (w[1].0 - w[0].0) as i64 - i64::from(config::servo::FRAME_US) * CYCLES_PER_US as i64;
+            assert!(err.abs() <= TOLERANCE_CYCLES);
+        }
+        assert_eq!(s.frames(), 5);
+    }
+
+    #[test]
+    fn plan_intervals_sum_to_the_frame_for_every_width() {
+        let widths = [0u16, 1, 544, 699, 700, 1500, 2300, 2301, 2400, u16::MAX];
+        for &l in &widths {
+            for &r in &widths {
+                let plan = FramePlan::new(PulseWidthUs(l), PulseWidthUs(r));
+                let phases = [Phase::LeftRise, Phase::LeftFall, Phase::RightRise, Phase::RightFall];
+                let sum: u32 = phases.iter().map(|&p| plan.edge(p).interval).sum();
+                assert_eq!(sum, FRAME_CYCLES);
+                for &p in &phases {
+                    assert!(plan.edge(p).interval >= (config::board::SERVO_EDGE_GUARD_US + HANDLER_US) * CYCLES_PER_US);
+                }
+                let lw = plan.edge(Phase::LeftRise).interval;
+                if l != 0 {
+                    assert_eq!(lw, u32::from(PulseWidthUs::safe(l.into()).0) * 80);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn mailbox_clamps_and_round_trips() {
+        let m = PulseMailbox::new();
+        assert_eq!(m.latest(), (PulseWidthUs::OFF, PulseWidthUs::OFF));
+        let table =
+            [((1500, 1200), (1500, 1200)), ((544, 2400), (700, 2300)), ((0, 65535), (0, 2300)), ((1, 0), (700, 0))];
+        for ((l, r), (wl, wr)) in table {
+            let mut out = ServoPulses::new(&m);
+            out.set_widths(PulseWidthUs(l), PulseWidthUs(r));
+            assert_eq!(m.latest(), (PulseWidthUs(wl), PulseWidthUs(wr)));
+        }
+    }
+
+    #[test]
+    fn timer_constants() {
+        assert_eq!(CYCLES_PER_US, 80);
+        assert_eq!(CYCLES_PER_TICK, 16);
+        assert_eq!(GUARD_CYCLES, 1_600);
+        assert_eq!(FRAME_CYCLES, 1_600_000);
+    }
+
+    #[test]
+    fn alarm_comes_before_the_edge_within_the_guard() {
+        // Each interrupt starts (latency 0) between 0 and GUARD_CYCLES before
+        // its edge: never after it, never more than the guard + a tick early.
+        let mut hw = SimChip::new();
+        let mailbox = PulseMailbox::new();
+        mailbox.publish(PulseWidthUs(1500), PulseWidthUs(900));
+        let mut s = PulseScheduler::new();
+        s.start(&mut hw);
+        for _ in 0..40 {
+            hw.now = hw.alarm_at;
+            let entry = hw.now;
+            let n = hw.edges.len();
+            s.on_alarm(&mut hw, &mailbox);
+            let lead = hw.edges.get(n).map(|e| e.0 - entry);
+            if let Some(lead) = lead {
+                let g = u64::from(GUARD_CYCLES);
+                assert!(lead >= g - 20 && lead <= g + u64::from(CYCLES_PER_TICK) + 20, "lead {lead}");
+            }
+        }
+        assert_eq!(s.late_edges(), 0);
+    }
+}
