@@ -147,27 +147,61 @@ impl<T: I2c, C> ErrorType for PollGuard<T, C> {
     type Error = GuardError<T::Error>;
 }
 
-impl<T: I2c, C: RegisterCheck> I2c for PollGuard<T, C> {
-    fn transaction(&mut self, address: u8, operations: &mut [Operation<'_>]) -> Result<(), Self::Error> {
-        // A register read is [Write([reg]), Read(buf)]: the pattern every
-        // read of the guarded drivers uses.
-        let reg = match operations {
-            [Operation::Write([reg]), Operation::Read(_)] => Some(*reg),
-            _ => None,
-        };
+impl<T: I2c, C: RegisterCheck> PollGuard<T, C> {
+    /// Before a transfer: a register read (`[reg]` written, then read) is
+    /// counted, anything else resets the count.
+    fn before(&mut self, reg: Option<u8>) -> Result<(), GuardError<T::Error>> {
         match reg {
-            Some(r) => self.note_read(r)?,
+            Some(r) => self.note_read(r),
             None => {
                 self.last_reg = None;
                 self.repeats = 0;
+                Ok(())
             }
         }
+    }
+
+    fn after(&mut self, reg: Option<u8>, data: &[u8]) -> Result<(), GuardError<T::Error>> {
+        match reg {
+            Some(r) if !self.check.plausible(r, data) => Err(GuardError::Implausible),
+            _ => Ok(()),
+        }
+    }
+}
+
+/// Each method forwards to the same method of the inner bus (so a mock
+/// sees exactly the driver's calls).
+impl<T: I2c, C: RegisterCheck> I2c for PollGuard<T, C> {
+    fn read(&mut self, address: u8, read: &mut [u8]) -> Result<(), Self::Error> {
+        self.before(None)?;
+        self.inner.read(address, read).map_err(GuardError::Bus)
+    }
+
+    fn write(&mut self, address: u8, write: &[u8]) -> Result<(), Self::Error> {
+        self.before(None)?;
+        self.inner.write(address, write).map_err(GuardError::Bus)
+    }
+
+    fn write_read(&mut self, address: u8, write: &[u8], read: &mut [u8]) -> Result<(), Self::Error> {
+        let reg = match write {
+            [r] => Some(*r),
+            _ => None,
+        };
+        self.before(reg)?;
+        self.inner.write_read(address, write, read).map_err(GuardError::Bus)?;
+        self.after(reg, read)
+    }
+
+    fn transaction(&mut self, address: u8, operations: &mut [Operation<'_>]) -> Result<(), Self::Error> {
+        let reg = match operations {
+            [Operation::Write([r]), Operation::Read(_)] => Some(*r),
+            _ => None,
+        };
+        self.before(reg)?;
         self.inner.transaction(address, operations).map_err(GuardError::Bus)?;
-        if let (Some(r), [_, Operation::Read(buf)]) = (reg, &*operations) {
-            if !self.check.plausible(r, buf) {
-                return Err(GuardError::Implausible);
-            }
+        match &*operations {
+            [_, Operation::Read(buf)] => self.after(reg, buf),
+            _ => Ok(()),
         }
-        Ok(())
     }
 }

@@ -180,7 +180,8 @@ impl<I2C: I2c, X: OutputPin, D: DelayNs> Lidar<I2C, X, D> {
         if self.address != config::i2c::LIDAR_DEFAULT_ADDR {
             chip.set_address(self.address).map_err(vl_error)?;
         }
-        let budget_set = chip.set_measurement_timing_budget(config::lidar::TIMING_BUDGET_US).map_err(|e| e.sensor_error())?;
+        let budget_set =
+            chip.set_measurement_timing_budget(config::lidar::TIMING_BUDGET_US).map_err(|e| e.sensor_error())?;
         if !budget_set {
             // The budget is valid (checked at compile time), so the chip's
             // timing registers made no sense: a corrupted transfer.
@@ -265,10 +266,7 @@ impl BringUp {
 /// one started and moved to its address, then the right one. A lidar that
 /// fails is held in reset and does not stop the other from starting; retry
 /// it later with [`RangeSensor::reinit`].
-pub fn bring_up<I2C1, X1, D1, I2C2, X2, D2>(
-    front: &mut Lidar<I2C1, X1, D1>,
-    right: &mut Lidar<I2C2, X2, D2>,
-) -> BringUp
+pub fn bring_up<I2C1, X1, D1, I2C2, X2, D2>(front: &mut Lidar<I2C1, X1, D1>, right: &mut Lidar<I2C2, X2, D2>) -> BringUp
 where
     I2C1: I2c,
     X1: OutputPin,

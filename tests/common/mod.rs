@@ -9,3 +9,4 @@ pub fn lab1(name: &str) -> String {
     std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{path}: {e}"))
 }
 pub mod reference;
+pub mod vl53l0x_script;
