@@ -146,8 +146,7 @@ impl Beam {
         let (px, py) = (pose.x.to_length(), pose.y.to_length());
         let ox = px.saturating_sub(Length(mul_q30(lateral.0, sin)));
         let oy = py.saturating_add(Length(mul_q30(lateral.0, cos)));
-        let (x_wall, ax) =
-            if cos >= 0 { (Wall::North, arena.length_x.saturating_sub(ox)) } else { (Wall::South, ox) };
+        let (x_wall, ax) = if cos >= 0 { (Wall::North, arena.length_x.saturating_sub(ox)) } else { (Wall::South, ox) };
         let (y_wall, ay) = if sin >= 0 { (Wall::East, arena.width_y.saturating_sub(oy)) } else { (Wall::West, oy) };
         // |sin|, |cos| <= 2^30: the absolute values cannot overflow.
         let (abs_s, abs_c) = (sin.saturating_abs(), cos.saturating_abs());

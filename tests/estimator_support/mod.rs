@@ -201,6 +201,10 @@ pub struct RunResult {
     /// Per tick: (t, truth, commands, front reading, right reading, compass deg) for logs.
     pub log: Vec<LogRow>,
     pub truth: Vec<(f64, TruePose)>,
+    /// Per tick: the estimate after the tick.
+    pub poses: Vec<Pose>,
+    /// The estimator's start pose.
+    pub start: Pose,
     pub stats: Option<paperbot::model::estimator::EstimatorStats>,
     pub min_wall_clearance: f64,
     pub max_sigma_pos_mm: f64,
@@ -252,7 +256,7 @@ pub fn run(sc: &Scenario, mut observe: impl FnMut(f64, &Estimator, TruePose)) ->
     let lidar_period_ms = config::lidar::TIMING_BUDGET_US / 1000;
     let axle = config::geometry::AXLE_LENGTH.to_mm_f64();
 
-    let mut res = RunResult { min_wall_clearance: f64::INFINITY, ..Default::default() };
+    let mut res = RunResult { min_wall_clearance: f64::INFINITY, start: start.to_pose(), ..Default::default() };
     let mut wp = 1usize;
     let mut cmd = STOP_CMD;
     let mut seg_factor = 1.0;
@@ -262,7 +266,7 @@ pub fn run(sc: &Scenario, mut observe: impl FnMut(f64, &Estimator, TruePose)) ->
     let mut next_right_ms = lidar_period_ms / 2;
     let ticks = (sc.seconds / dt_s).round() as u32;
     for tick in 0..ticks {
-        let t_ms = tick * tick_us / 1000;
+        let t_ms = tick * (tick_us / 1000);
         let t = f64::from(t_ms) / 1000.0;
         // --- the oracle driver decides from the truth ---
         let (tx, ty) = wps[wp % wps.len()];
@@ -277,7 +281,8 @@ pub fn run(sc: &Scenario, mut observe: impl FnMut(f64, &Estimator, TruePose)) ->
                 pause_until = t + sc.pause_s;
             }
             STOP_CMD
-        } else if bearing_err.abs() > 6f64.to_radians() && !(cmd == FORWARD_CMD && bearing_err.abs() < 15f64.to_radians())
+        } else if bearing_err.abs() > 6f64.to_radians()
+            && !(cmd == FORWARD_CMD && bearing_err.abs() < 15f64.to_radians())
         {
             if bearing_err > 0.0 {
                 CW_CMD
@@ -310,8 +315,7 @@ pub fn run(sc: &Scenario, mut observe: impl FnMut(f64, &Estimator, TruePose)) ->
             Motion::Turn(w) => (2, 0.0, w.to_rad_s_f64() * seg_factor),
         };
         truth = truth_step(truth, kind, v, w, seg_drift, dt_s);
-        res.min_wall_clearance =
-            res.min_wall_clearance.min(truth.x).min(truth.y).min(lx - truth.x).min(wy - truth.y);
+        res.min_wall_clearance = res.min_wall_clearance.min(truth.x).min(truth.y).min(lx - truth.x).min(wy - truth.y);
         // --- estimator and dead reckoning ---
         est.predict(motion, dt);
         dr = step(&dr, motion, dt);
@@ -346,8 +350,9 @@ pub fn run(sc: &Scenario, mut observe: impl FnMut(f64, &Estimator, TruePose)) ->
             heading += sign * (30.0 + 60.0 * rng.uniform()).to_radians();
             res.injected_compass_outliers += 1;
         }
-        let heading_deg = heading.to_degrees().rem_euclid(360.0);
-        row.heading_deg = Some((heading_deg * 100.0).round() / 100.0);
+        // logged (and used) to 0.01 degree, as the replay tool reads it
+        let heading_deg = (heading.to_degrees().rem_euclid(360.0) * 100.0).round() / 100.0;
+        row.heading_deg = Some(heading_deg);
         est.update_heading(Angle::from_degrees_f64(heading_deg));
         res.log.push(row);
         res.truth.push((t, truth));
@@ -358,6 +363,7 @@ pub fn run(sc: &Scenario, mut observe: impl FnMut(f64, &Estimator, TruePose)) ->
             (t, ((x - truth.x).powi(2) + (y - truth.y).powi(2)).sqrt(), dth)
         };
         res.est.push(err(&est.pose()));
+        res.poses.push(est.pose());
         res.dr.push(err(&dr));
         let sig = est.sigma();
         res.max_sigma_pos_mm = res.max_sigma_pos_mm.max(sig.x.to_mm_f64()).max(sig.y.to_mm_f64());
@@ -369,4 +375,27 @@ pub fn run(sc: &Scenario, mut observe: impl FnMut(f64, &Estimator, TruePose)) ->
 /// The test arena's size as Lengths.
 pub fn arena_mm() -> (Length, Length) {
     (config::arena::LENGTH_X, config::arena::WIDTH_Y)
+}
+
+/// The run as a replay log (`t_ms,left_cmd,right_cmd,front_mm,right_mm,heading_deg`):
+/// row k holds the commands decided at tick k and the readings taken at the
+/// end of tick k - 1 (time 10 k ms), the order the replay tool applies them.
+pub fn replay_log(res: &RunResult) -> String {
+    use std::fmt::Write as _;
+    let mut s = String::from("t_ms,left_cmd,right_cmd,front_mm,right_mm,heading_deg\n");
+    let opt = |v: Option<u16>| v.map(|r| r.to_string()).unwrap_or_default();
+    for (k, row) in res.log.iter().enumerate() {
+        let prev = if k > 0 { res.log.get(k - 1) } else { None };
+        let _ = writeln!(
+            s,
+            "{},{},{},{},{},{}",
+            row.t_ms,
+            row.cmd.0,
+            row.cmd.1,
+            opt(prev.and_then(|p| p.front)),
+            opt(prev.and_then(|p| p.right)),
+            prev.and_then(|p| p.heading_deg).map(|h| format!("{h:.2}")).unwrap_or_default()
+        );
+    }
+    s
 }

@@ -430,7 +430,7 @@ impl Estimator {
             s = if positive { s + bp } else { s - bp };
         }
         let s = s.max(0) + r; // H P H^T >= 0 for a valid P; r > 0
-        // Gate: nu^2 (Q32) >> 18 -> Q14, against gate^2 S; nu^2 < 2^62, S < 2^41.
+                              // Gate: nu^2 (Q32) >> 18 -> Q14, against gate^2 S; nu^2 < 2^62, S < 2^41.
         let nu64 = i64::from(nu);
         if (nu64 * nu64) >> 18 > (s * GATE_SQ_Q8) >> 8 {
             return Update::Outlier;
@@ -457,7 +457,7 @@ impl Estimator {
         self.pose.y = Coord(self.pose.y.0.saturating_add(dy));
         let dlsb = dt.saturating_mul(LSB_PER_TILDE_MM_Q16) >> 32;
         self.pose.theta = self.pose.theta.wrapping_add(Angle(dlsb as u32)); // modulo one turn
-        // P -= K b^T (upper triangle; K_i b_j = b_i b_j / S, Q16 * Q14 >> 16).
+                                                                            // P -= K b^T (upper triangle; K_i b_j = b_i b_j / S, Q16 * Q14 >> 16).
         let sub = |pij: i32, ki: i64, bj: i64| -> i32 {
             let v = i64::from(pij) - (ki.saturating_mul(bj) >> 16);
             v.clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32
