@@ -94,7 +94,8 @@ fn pair_bring_up_holds_the_right_lidar_in_reset_until_the_front_one_has_moved() 
     // The right one stays in reset until the front one has left 0x29...
     assert!(front_moves < last("right high"));
     // ...and only then does anyone talk to 0x29 again.
-    let at_boot_addr: Vec<usize> = log.iter().enumerate().filter(|(_, l)| l.starts_with("i2c 0x29")).map(|(i, _)| i).collect();
+    let at_boot_addr: Vec<usize> =
+        log.iter().enumerate().filter(|(_, l)| l.starts_with("i2c 0x29")).map(|(i, _)| i).collect();
     assert!(at_boot_addr.iter().all(|&i| i <= front_moves || i > last("right high")));
     assert!(right_moves > last("right high"));
     drop(log);

@@ -11,8 +11,11 @@
 //! the running centre of the min/max box, visited at least
 //! [`config::compass::CALIBRATION_MIN_SECTORS`] of the twelve 30-degree
 //! sectors (a robot that turned half a circle, or not at all, gives a box
-//! that is not the field's). [`ConfigLine`] prints the result as a line to
-//! paste into `src/config.rs`.
+//! that is not the field's). The centre only settles once the turn has
+//! passed every extreme, so the first turn counts about 9 sectors: a sweep
+//! must be longer than one turn (the configured 1000 samples at 100 Hz are
+//! 3.5 to 5 turns at the robot's 2.2 to 3.2 rad/s). [`ConfigLine`] prints
+//! the result as a line to paste into `src/config.rs`.
 
 use core::fmt;
 

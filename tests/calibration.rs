@@ -1,0 +1,146 @@
+//! The magnetometer calibration sweep: a synthetic turn through a field
+//! distorted by the report's hard and soft iron gives the report's numbers
+//! back; incomplete sweeps are rejected; the config line round-trips.
+
+use paperbot::config;
+use paperbot::driver::calibration::{CalStatus, CalibrationError, ConfigLine, MagCalibrator};
+use paperbot::model::compass::{MagCalibration, MagCounts};
+
+/// Half-ranges (counts) that the report's scales imply for a 150-count
+/// field: scale_i = mean(h) / h_i, so h_i = 150 / scale_i.
+fn half_ranges() -> [f64; 3] {
+    let s = [0.679012, 0.833333, 3.055556];
+    [150.0 / s[0], 150.0 / s[1], 150.0 / s[2]]
+}
+
+/// Raw counts (ASA 128, so raw = adjusted) at turn angle `t` (radians).
+fn sample(t: f64) -> MagCounts {
+    let h = half_ranges();
+    let b = [79.0, 35.0, 2.0];
+    MagCounts {
+        x: (b[0] + h[0] * t.cos()).round() as i16,
+        y: (b[1] + h[1] * t.sin()).round() as i16,
+        // the car rocks on its skid as it turns
+        z: (b[2] + h[2] * (t + 0.3).sin()).round() as i16,
+    }
+}
+
+fn sweep(turns: f64, n: u16) -> MagCalibrator {
+    let mut cal = MagCalibrator::with_config([128; 3]);
+    for k in 0..n {
+        let t = turns * std::f64::consts::TAU * f64::from(k) / f64::from(n);
+        let status = cal.feed(sample(t));
+        let want = if k + 1 >= config::compass::CALIBRATION_SAMPLES {
+            CalStatus::Done
+        } else {
+            CalStatus::Collecting(k + 1)
+        };
+        assert_eq!(status, want);
+    }
+    cal
+}
+
+#[test]
+fn the_first_turn_only_builds_the_box() {
+    // Sectors are seen from the running centre of the min/max box, which
+    // only settles once the turn has passed every extreme: over the first
+    // turn the vector sweeps 90..360 degrees (9 sectors), so a sweep must
+    // be longer than one turn (1000 samples at 100 Hz are 3.5 to 5 turns at
+    // the robot's 2.2 to 3.2 rad/s).
+    assert_eq!(sweep(1.0, config::compass::CALIBRATION_SAMPLES).sectors(), 9);
+    assert_eq!(sweep(1.25, config::compass::CALIBRATION_SAMPLES).sectors(), 12);
+}
+
+#[test]
+fn a_sweep_recovers_the_reports_calibration() {
+    let n = config::compass::CALIBRATION_SAMPLES;
+    let cal = sweep(2.0, n);
+    assert_eq!(cal.sectors(), 12);
+    let got = cal.result().unwrap();
+    assert_eq!(got.bias, [79, 35, 2]);
+    let report = config::compass::CALIBRATION;
+    for i in 0..3 {
+        let rel = f64::from(got.scale_q16[i] - report.scale_q16[i]) / f64::from(report.scale_q16[i]);
+        // Ranges are whole counts: within 0.5 % of the report's scales.
+        assert!(rel.abs() < 0.005, "axis {i}: {} vs {}", got.scale_q16[i], report.scale_q16[i]);
+    }
+}
+
+#[test]
+fn asa_is_applied_before_the_sweep() {
+    // A chip with ASA 0 on x reads half the field: the bias comes out in
+    // adjusted counts, like the config's.
+    let mut cal = MagCalibrator::new([0, 128, 128], config::compass::AXES, 400, 11, 10);
+    for k in 0..400 {
+        let t = 2.0 * std::f64::consts::TAU * f64::from(k) / 400.0;
+        let s = sample(t);
+        cal.feed(MagCounts { x: s.x.wrapping_mul(2), ..s });
+    }
+    assert_eq!(cal.result().unwrap().bias[0], 79);
+}
+
+#[test]
+fn half_a_turn_is_rejected() {
+    let cal = sweep(0.5, config::compass::CALIBRATION_SAMPLES);
+    assert!(cal.sectors() <= 7, "{}", cal.sectors());
+    assert!(matches!(cal.result(), Err(CalibrationError::SweepIncomplete { need: 11, .. })));
+}
+
+#[test]
+fn standing_still_with_noise_visits_no_sector() {
+    let mut cal = MagCalibrator::with_config([128; 3]);
+    let mut seed = 1u32;
+    for _ in 0..config::compass::CALIBRATION_SAMPLES {
+        seed = seed.wrapping_mul(1_103_515_245).wrapping_add(12345);
+        let n = |s: u32| ((s >> 16) % 7) as i16 - 3;
+        cal.feed(MagCounts { x: 200 + n(seed), y: -30 + n(seed >> 3), z: 5 + n(seed >> 6) });
+    }
+    assert_eq!(cal.sectors(), 0);
+    assert_eq!(cal.result(), Err(CalibrationError::SweepIncomplete { sectors: 0, need: 11 }));
+}
+
+#[test]
+fn too_few_samples_and_flat_axes_are_rejected() {
+    let mut cal = MagCalibrator::with_config([128; 3]);
+    cal.feed(sample(0.0));
+    assert_eq!(cal.result(), Err(CalibrationError::NotEnoughSamples { have: 1, need: 1000 }));
+    // z never changes: no scale can be computed for it.
+    let mut flat = MagCalibrator::new([128; 3], config::compass::AXES, 360, 11, 10);
+    for k in 0..360 {
+        let s = sample(2.0 * std::f64::consts::TAU * f64::from(k) / 360.0);
+        flat.feed(MagCounts { z: 7, ..s });
+    }
+    assert_eq!(flat.result(), Err(CalibrationError::Degenerate { axis: 2 }));
+}
+
+#[test]
+fn samples_after_the_sweep_are_ignored() {
+    let mut cal = sweep(2.0, config::compass::CALIBRATION_SAMPLES);
+    let before = cal.result().unwrap();
+    assert_eq!(cal.feed(MagCounts { x: 30000, y: 30000, z: 30000 }), CalStatus::Done);
+    assert_eq!(cal.result().unwrap(), before);
+    assert_eq!(cal.samples(), config::compass::CALIBRATION_SAMPLES);
+}
+
+#[test]
+fn the_config_line_reproduces_the_report_constant_and_round_trips() {
+    // The report's scales as the Q16 values the robot uses (0.679012 is
+    // 44499.3 / 65536, stored as 44499 = 0.679016...).
+    let line = ConfigLine(&config::compass::CALIBRATION).to_string();
+    assert_eq!(
+        line,
+        "pub const CALIBRATION: MagCalibration = MagCalibration::from_f64([79.0, 35.0, 2.0], [0.679016, 0.833328, 3.055557]);"
+    );
+    // Any calibration survives print -> from_f64.
+    for cal in [config::compass::CALIBRATION, sweep(2.0, 1000).result().unwrap(), MagCalibration { bias: [-5, 0, 123], scale_q16: [1, 65536, 9_999_999] }] {
+        let line = ConfigLine(&cal).to_string();
+        let nums: Vec<f64> = line
+            .split(|c: char| !(c.is_ascii_digit() || c == '.' || c == '-'))
+            .filter(|s| s.contains('.'))
+            .map(|s| s.parse().unwrap())
+            .collect();
+        assert_eq!(nums.len(), 6, "{line}");
+        let back = MagCalibration::from_f64([nums[0], nums[1], nums[2]], [nums[3], nums[4], nums[5]]);
+        assert_eq!(back, cal, "{line}");
+    }
+}
