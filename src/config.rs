@@ -391,3 +391,35 @@ pub mod estimator {
     /// Smallest variance kept, mm^2 (same units): 0.1 mm, 0.02 degrees.
     pub const MIN_VARIANCE_MM2: f64 = 0.01;
 }
+
+/// The simulated robot (`sim`, host only; f64 is fine: nothing here reaches
+/// the robot). Noise levels from the lab's data where it has them.
+pub mod sim {
+    /// Lidar noise (one sigma), mm: the spread of the lab's repeated
+    /// readings at fixed distances (data `lidar_*.csv`, about 1.6 mm).
+    pub const LIDAR_NOISE_MM: f64 = 1.6;
+    /// Compass heading noise (one sigma), degrees: the spread of the lab's
+    /// check against a printed compass (data `magnetometer_heading.csv`,
+    /// PAPERBOT: about 2.5 degrees).
+    pub const COMPASS_NOISE_DEG: f64 = 2.5;
+    /// Straight speed noise per loop tick (one sigma), fraction of the
+    /// speed: white noise on top of the fitted lines (averages to about 1%
+    /// over a one-second run; the lab's runs spread by a few percent, data
+    /// `servo_runs.csv`, most of which the lines absorb).
+    pub const SPEED_NOISE: f64 = 0.10;
+    /// Turn rate noise per loop tick (one sigma), fraction of the rate.
+    pub const TURN_NOISE: f64 = 0.10;
+    /// Horizontal earth field after calibration, ASA-adjusted counts:
+    /// about 24 uT at UCLA (NOAA WMM) at 0.15 uT per count.
+    pub const FIELD_HORIZONTAL_COUNTS: f64 = 160.0;
+    /// Vertical (down) earth field, counts: about 38 uT at UCLA (NOAA WMM).
+    pub const FIELD_DOWN_COUNTS: f64 = 253.0;
+    /// Where the default run starts, mm and degrees: a lap around the box
+    /// (see `sim::script::DEFAULT`) from its south-west quarter.
+    pub const START_X_MM: f64 = 180.0;
+    pub const START_Y_MM: f64 = 130.0;
+    pub const START_HEADING_DEG: f64 = 0.0;
+    /// Half the car's width at the wheels, mm (the 85 mm axle): a wheel
+    /// that would pass a wall is a collision.
+    pub const HALF_TRACK_MM: f64 = 42.5;
+}

@@ -405,7 +405,9 @@ fn telemetry_reports_each_fresh_reading_once() {
     send(&mut ctl, &mut out, "pose 100 200 45");
     send(&mut ctl, &mut out, "rate 50");
     send(&mut ctl, &mut out, "servo 100 100");
-    run(&mut ctl, &mut out, 0, 40);
+    ctl.tick(0, &mut out);
+    let pose_at_0 = ctl.pose(); // corrected by the first readings
+    run(&mut ctl, &mut out, 10, 40);
     let lines = out.take();
     let rows: Vec<_> = lines.iter().filter_map(|l| parse_telemetry_row(l).ok()).collect();
     assert_eq!(rows.len(), 2, "{lines:?}");
@@ -417,7 +419,11 @@ fn telemetry_reports_each_fresh_reading_once() {
     assert_eq!(a.mag_raw, Some([100, -20, 3]));
     assert_eq!(a.mag_field, Some([14, -37, 3]));
     assert_eq!(a.compass_mdeg, Some(45_000));
-    assert_eq!((a.x_dmm, a.y_dmm, a.heading_mdeg), (1000, 2000, 45_000));
+    let dmm = |c: paperbot::math::Coord| (c.to_mm_f64() * 10.0).round() as i32;
+    assert_eq!(
+        (a.x_dmm, a.y_dmm, a.heading_mdeg),
+        (dmm(pose_at_0.x), dmm(pose_at_0.y), pose_at_0.theta.to_millidegrees())
+    );
     assert_eq!((a.left_cmd_centi, a.right_cmd_centi), (10_000, 10_000));
     assert_eq!(a.motion, MotionKind::Cw);
     assert_eq!((b.front_raw_mm, b.mag_raw), (None, None), "not fresh any more");
@@ -469,7 +475,9 @@ fn bus_errors_take_a_sensor_down_after_a_few_and_it_is_reinitialised_after_the_b
     assert_eq!(ctl.last_front(), Some(lidar(300)));
     // the others were never touched
     assert!(ctl.right_health().up && ctl.compass_health().up);
-    assert_eq!(ctl.faults(), FaultCounters { bus: 1 + u32::from(n), missing: 1, ..FaultCounters::default() });
+    // (the doubles' readings do not fit the pose: the estimator rejects them)
+    let f = FaultCounters { rejected_outliers: 0, ..ctl.faults() };
+    assert_eq!(f, FaultCounters { bus: 1 + u32::from(n), missing: 1, ..FaultCounters::default() });
 }
 
 #[test]
@@ -605,4 +613,29 @@ fn any_motion_command_abandons_a_calibration() {
     send(&mut ctl, &mut out, "stop");
     assert_eq!(out.take(), ["# calibration abandoned after 0 samples", "# ok stop"]);
     assert_eq!(ctl.mode(), Mode::Idle);
+}
+
+// ---- the estimator -------------------------------------------------------
+
+#[test]
+fn the_estimator_corrects_the_pose_with_fresh_readings_dead_reckoning_does_not() {
+    let (mut ctl, mut out) = setup();
+    // believed at x = 300 facing north; the front lidar sees the north wall
+    // as if from x = 320 (762.5 - 320 = 442.5 mm ahead)
+    send(&mut ctl, &mut out, "pose 300 200 0");
+    let raw = config::lidar::FRONT.reading_for(paperbot::math::Length::from_mm_f64(442.5)).unwrap();
+    ctl.front().steady = Some(LidarSample { raw_mm: raw, range: config::lidar::FRONT.range(raw) });
+    let mut xs = vec![];
+    for i in 0..100 {
+        ctl.tick(i * TICK_US, &mut out);
+        xs.push(ctl.pose().x.to_mm_f64());
+    }
+    let last = *xs.last().unwrap();
+    assert!((last - 320.0).abs() < 2.0, "estimate x {last}");
+    assert!(xs.windows(2).all(|w| w[1] >= w[0] - 1e-9), "moves towards the reading");
+    assert_eq!(ctl.dead_reckoned(), Pose::from_mm(300, 200, Angle::ZERO));
+    assert!(ctl.estimator().stats().front.accepted > 50);
+    // `pose` resets both
+    send(&mut ctl, &mut out, "pose 100 100 0");
+    assert_eq!(ctl.pose(), ctl.dead_reckoned());
 }

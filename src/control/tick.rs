@@ -4,10 +4,13 @@
 //! Each tick, in this order:
 //! 1. time: the elapsed time since the previous tick (`now_us` is a free-running,
 //!    wrapping microsecond counter; the loop keeps its own 64-bit clock);
-//! 2. state update: the pose moves by the motion the servos were driving
-//!    since the previous tick ([`model::step`], and the estimator's predict);
+//! 2. state update: the estimator predicts with the motion the servos were
+//!    driving since the previous tick (the fixed-point [`crate::model::step`]
+//!    plus its uncertainty); a dead-reckoned pose (`step` alone) is kept
+//!    beside it for comparison;
 //! 3. sensing: each sensor is polled once, never waited for; a fresh reading
-//!    updates the estimator; a failed sensor is counted, marked down and
+//!    corrects the estimator (an outlier is counted in the telemetry's
+//!    `f_outliers`); a failed sensor is counted, marked down and
 //!    re-initialised after [`config::timing::SENSOR_RETRY_MS`];
 //! 4. deciding: a timed command that has run out, or the deadman
 //!    ([`config::timing::DEADMAN_MS`] without a command), stops the robot;
@@ -45,7 +48,9 @@ use crate::driver::calibration::{CalStatus, CalibrationError, ConfigLine, MagCal
 use crate::driver::{CompassSample, HeadingSensor, LidarSample, MagCalibrate, SensorError, Servos};
 use crate::math::{Coord, Dt, Length, TurnRate};
 use crate::model::compass::MagCalibration;
-use crate::model::{step, ActuatorModel, Drive, Motion, Pose, ServoCmd};
+use crate::model::estimator::{Estimator, Update};
+use crate::model::measurement::{Arena, LidarId};
+use crate::model::{step, ActuatorModel, Drive, Motion, Pose, Range, ServoCmd};
 
 /// Where the loop writes its output lines (without terminators): the UART
 /// on the robot, a `Vec<String>` in tests, a channel in the simulator.
@@ -171,8 +176,10 @@ pub struct Controller<F, R, C, S> {
     mode: Mode,
     /// Servo commands and motion applied at the last tick.
     applied: Drive,
+    /// The pose estimate (state update corrected by the sensors).
+    estimator: Estimator,
     /// Dead-reckoned pose (the state update alone).
-    pose: Pose,
+    dead: Pose,
 
     telemetry_hz: u16,
     telemetry_period_us: u64,
@@ -214,8 +221,14 @@ where
     S: Servos,
 {
     /// A loop over sensors the caller has brought up (a sensor that fails
-    /// later is re-initialised by the loop), starting at `pose`, stopped.
+    /// later is re-initialised by the loop), starting at `pose` in the
+    /// config's arena, stopped.
     pub fn new(front: F, right: R, compass: C, servos: S, pose: Pose) -> Self {
+        Self::new_in(front, right, compass, servos, pose, Arena::DEFAULT)
+    }
+
+    /// [`Controller::new`] in another arena (the simulator's).
+    pub fn new_in(front: F, right: R, compass: C, servos: S, pose: Pose, arena: Arena) -> Self {
         let model = config::actuators::MODEL;
         let mut c = Controller {
             front,
@@ -231,7 +244,8 @@ where
             last_command_us: 0,
             mode: Mode::Idle,
             applied: model.stop(),
-            pose,
+            estimator: Estimator::with_arena(pose, arena),
+            dead: pose,
             telemetry_hz: 0,
             telemetry_period_us: 0,
             next_telemetry_us: 0,
@@ -317,11 +331,13 @@ where
             }
             Command::SetPose { x_mm, y_mm, heading } => {
                 self.respond(&Response::Ok(&cmd), sink);
-                self.pose = Pose::new(
+                let pose = Pose::new(
                     Coord::from_length(Length::from_mm(x_mm)),
                     Coord::from_length(Length::from_mm(y_mm)),
                     heading,
                 );
+                self.estimator.reset(pose);
+                self.dead = pose;
             }
             Command::Calibrate { samples } => {
                 self.respond(&Response::Ok(&cmd), sink);
@@ -428,7 +444,8 @@ where
         let mut n = 0;
         while left > 0 && n < MAX_STEPS {
             let dt = Dt::from_micros_saturating(left);
-            self.pose = step(&self.pose, motion, dt);
+            self.estimator.predict(motion, dt);
+            self.dead = step(&self.dead, motion, dt);
             left -= dt.as_micros(); // dt <= left
             n += 1;
         }
@@ -438,17 +455,33 @@ where
         if let Some(Reading::Lidar(s)) = self.service(Which::Front, now) {
             self.fresh_front = Some(s);
             self.last_front = Some(s);
+            if let Range::Target(d) = s.range {
+                let u = self.estimator.update_lidar(LidarId::Front, d);
+                self.count_update(u);
+            }
         }
         if let Some(Reading::Lidar(s)) = self.service(Which::Right, now) {
             self.fresh_right = Some(s);
             self.last_right = Some(s);
+            if let Range::Target(d) = s.range {
+                let u = self.estimator.update_lidar(LidarId::Right, d);
+                self.count_update(u);
+            }
         }
         if let Some(Reading::Compass(s)) = self.service(Which::Compass, now) {
             self.fresh_compass = Some(s);
             self.last_compass = Some(s);
+            let u = self.estimator.update_heading(s.heading);
+            self.count_update(u);
             if let Some(cal) = self.calibrator.as_mut() {
                 self.calibration_done = cal.feed(s.raw) == CalStatus::Done;
             }
+        }
+    }
+
+    fn count_update(&mut self, u: Update) {
+        if u == Update::Outlier {
+            self.faults.rejected_outliers = self.faults.rejected_outliers.saturating_add(1);
         }
     }
 
@@ -637,7 +670,7 @@ where
         }
         let t = Telemetry {
             t_ms: self.t_ms(),
-            pose: self.pose,
+            pose: self.estimator.pose(),
             front: self.fresh_front.take(),
             right: self.fresh_right.take(),
             compass: self.fresh_compass.take(),
@@ -662,13 +695,16 @@ where
     pub fn clock_us(&self) -> u64 {
         self.clock_us
     }
-    /// The pose the telemetry reports.
+    /// The pose the telemetry reports: the estimator's.
     pub fn pose(&self) -> Pose {
-        self.pose
+        self.estimator.pose()
     }
-    /// The dead-reckoned pose (the state update alone).
+    /// The dead-reckoned pose (the state update alone, from the last `pose`).
     pub fn dead_reckoned(&self) -> Pose {
-        self.pose
+        self.dead
+    }
+    pub fn estimator(&self) -> &Estimator {
+        &self.estimator
     }
     pub fn mode(&self) -> Mode {
         self.mode
@@ -732,7 +768,7 @@ where
             mode: self.mode.word(),
             motion: self.applied.motion,
             remaining_ms,
-            pose: self.pose,
+            pose: self.estimator.pose(),
             left_cmd: self.applied.left,
             right_cmd: self.applied.right,
             left_trim: self.model.left_trim,

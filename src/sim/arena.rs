@@ -39,6 +39,10 @@ impl Arena {
     /// misses the box). A ray from inside always hits.
     pub fn ray_cast(&self, x: f64, y: f64, heading: f64) -> Option<f64> {
         let (dy, dx) = heading.sin_cos();
+        // from inside (walls included) only the walls ahead count, so a ray
+        // leaving a wall or a corner is not stopped by it at distance 0
+        let inside = self.contains(x, y);
+        let ahead = |wall: f64, pos: f64, dir: f64| !inside || (wall - pos) * dir > 0.0;
         let mut best: Option<f64> = None;
         let mut consider = |t: f64, other: f64, lo: f64, hi: f64| {
             // tolerance for hits exactly on a corner
@@ -47,13 +51,13 @@ impl Arena {
             }
         };
         if dx != 0.0 {
-            for wall in [0.0, self.length_x] {
+            for wall in [0.0, self.length_x].into_iter().filter(|&w| ahead(w, x, dx)) {
                 let t = (wall - x) / dx;
                 consider(t, y + t * dy, 0.0, self.width_y);
             }
         }
         if dy != 0.0 {
-            for wall in [0.0, self.width_y] {
+            for wall in [0.0, self.width_y].into_iter().filter(|&w| ahead(w, y, dy)) {
                 let t = (wall - y) / dy;
                 consider(t, x + t * dx, 0.0, self.length_x);
             }

@@ -38,7 +38,11 @@ impl PoseF64 {
     /// The firmware's fixed-point pose nearest to this one.
     pub fn to_pose(&self) -> crate::model::Pose {
         use crate::math::{Angle, Coord};
-        crate::model::Pose::new(Coord::from_mm_f64(self.x), Coord::from_mm_f64(self.y), Angle::from_radians_f64(self.theta))
+        crate::model::Pose::new(
+            Coord::from_mm_f64(self.x),
+            Coord::from_mm_f64(self.y),
+            Angle::from_radians_f64(self.theta),
+        )
     }
     /// Where a lidar mounted at `mount` sits and which way it looks
     /// (x, y in mm, direction in radians clockwise from north).
@@ -105,7 +109,11 @@ pub fn advance(pose: &PoseF64, motion: MotionF64, dt_s: f64, kin: Kinematics, d_
                 Kinematics::Rigid => d_mm * (s1 - s0),
                 Kinematics::Report => d_mm * (s0 - s1),
             };
-            PoseF64 { x: pose.x + d_mm * (c1 - c0), y: pose.y + dy, theta: wrap_pi(theta).rem_euclid(core::f64::consts::TAU) }
+            PoseF64 {
+                x: pose.x + d_mm * (c1 - c0),
+                y: pose.y + dy,
+                theta: wrap_pi(theta).rem_euclid(core::f64::consts::TAU),
+            }
         }
     }
 }

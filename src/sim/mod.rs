@@ -6,9 +6,11 @@
 
 pub mod arena;
 pub mod body;
-pub mod noise;
-pub mod svg;
 pub mod bus;
 pub mod mpu9250;
+pub mod noise;
+pub mod robot;
+pub mod script;
 pub mod sensors;
+pub mod svg;
 pub mod vl53l0x;

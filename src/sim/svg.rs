@@ -91,10 +91,8 @@ pub fn render(arena: &Arena, tracks: &[Track<'_>], title: &str) -> String {
         );
         ly += LEGEND_ROW;
     }
-    let _ = writeln!(
-        s,
-        r#"<text x="{MARGIN}" y="{ly:.1}">open circle: start; filled: end; line: heading</text></svg>"#
-    );
+    let _ =
+        writeln!(s, r#"<text x="{MARGIN}" y="{ly:.1}">open circle: start; filled: end; line: heading</text></svg>"#);
     s
 }
 

@@ -1,0 +1,346 @@
+//! [`SimRobot`]: the firmware's control loop driving a simulated paperbot.
+//!
+//! Each [`SimRobot::tick`] (one loop period of simulated time):
+//! 1. the fake chips get the truth at this instant: each lidar's ray is cast
+//!    from its mount to the arena's walls, the distance from the reference
+//!    point along it gets Gaussian noise and becomes the chip's reading
+//!    through the inverse lidar model ([`LidarModel::reading_for`]); the
+//!    compass's earth field is turned into the car's frame at the true
+//!    magnetic heading (plus noise), then distorted by the inverse of the
+//!    configured hard/soft-iron calibration, so the driver's correction
+//!    undoes it;
+//! 2. the control loop ticks: its drivers talk to the fake chips over the
+//!    simulated bus (register level), it reads, steps, acts, reports;
+//! 3. the body moves for one period by what its servo commands make by the
+//!    actuator model ([`ActuatorModel::motion_from_commands`]), with
+//!    per-tick noise on the speed and turn rate.
+//!
+//! Commands go in byte by byte ([`SimRobot::feed`]) and the loop's output
+//! lines come out of [`SimRobot::take_output`], so the same robot serves a
+//! scripted run ([`SimRobot::run_script`]) and a real-time pseudo-terminal.
+
+use std::string::String;
+use std::vec::Vec;
+
+use super::arena::Arena;
+use super::body::{advance, Kinematics, MotionF64, PoseF64};
+use super::noise::Rng;
+use super::script::Script;
+use super::sensors::{SimCompass, SimLidar, SimSensors};
+use crate::config;
+use crate::config::geometry::LidarMount;
+use crate::control::{Controller, LineSink, TICK_US};
+use crate::driver::{HeadingSensor, Servos};
+use crate::math::Length;
+use crate::model::{LidarModel, ServoCmd};
+
+/// The servos as the simulator sees them: the last commands set.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub struct SimServos {
+    pub left: ServoCmd,
+    pub right: ServoCmd,
+}
+
+impl Default for SimServos {
+    fn default() -> Self {
+        let m = config::actuators::MODEL;
+        SimServos { left: m.left_neutral(), right: m.right_neutral() }
+    }
+}
+
+impl Servos for SimServos {
+    fn set(&mut self, left: ServoCmd, right: ServoCmd) {
+        self.left = left;
+        self.right = right;
+    }
+}
+
+/// The control loop on the simulated drivers.
+pub type SimController = Controller<SimLidar, SimLidar, SimCompass, SimServos>;
+
+/// Noise levels (one sigma); [`Noise::OFF`] for exact runs.
+#[derive(Clone, Copy, PartialEq, Debug)]
+pub struct Noise {
+    /// Straight speed, fraction per tick.
+    pub speed: f64,
+    /// Turn rate, fraction per tick.
+    pub turn: f64,
+    /// Lidar distance, mm.
+    pub lidar_mm: f64,
+    /// Compass heading, degrees.
+    pub compass_deg: f64,
+}
+
+impl Noise {
+    pub const OFF: Noise = Noise { speed: 0.0, turn: 0.0, lidar_mm: 0.0, compass_deg: 0.0 };
+}
+
+impl Default for Noise {
+    /// The config's levels ([`config::sim`]).
+    fn default() -> Self {
+        Noise {
+            speed: config::sim::SPEED_NOISE,
+            turn: config::sim::TURN_NOISE,
+            lidar_mm: config::sim::LIDAR_NOISE_MM,
+            compass_deg: config::sim::COMPASS_NOISE_DEG,
+        }
+    }
+}
+
+/// How to set up a simulated robot.
+#[derive(Clone, Copy, PartialEq, Debug)]
+pub struct SimConfig {
+    pub arena: Arena,
+    /// The true start pose; the firmware starts believing it too.
+    pub start: PoseF64,
+    pub seed: u64,
+    pub noise: Noise,
+    pub kinematics: Kinematics,
+}
+
+impl Default for SimConfig {
+    fn default() -> Self {
+        SimConfig {
+            arena: Arena::default(),
+            start: PoseF64::new(
+                config::sim::START_X_MM,
+                config::sim::START_Y_MM,
+                config::sim::START_HEADING_DEG.to_radians(),
+            ),
+            seed: 1,
+            noise: Noise::default(),
+            kinematics: Kinematics::default(),
+        }
+    }
+}
+
+/// Output lines collected from the loop.
+#[derive(Default)]
+struct Collect(Vec<String>);
+
+impl LineSink for Collect {
+    fn write_line(&mut self, line: &str) {
+        self.0.push(line.into());
+    }
+}
+
+/// One recorded instant of a run.
+#[derive(Clone, Copy, PartialEq, Debug)]
+pub struct Sample {
+    pub t_us: u64,
+    pub truth: PoseF64,
+    /// What the firmware reports (its telemetry pose: the estimator's).
+    pub estimate: PoseF64,
+    /// The firmware's dead-reckoned pose (state update alone).
+    pub dead_reckoned: PoseF64,
+}
+
+/// The simulated robot (see the module docs).
+pub struct SimRobot {
+    pub cfg: SimConfig,
+    /// The bus, the clock and the fake chips (inject faults here).
+    pub sensors: SimSensors,
+    ctl: SimController,
+    truth: PoseF64,
+    rng: Rng,
+    out: Collect,
+    /// Loop clock of the next tick, ns on the simulated clock.
+    next_tick_ns: u64,
+    /// Ticks whose motion was refused because a wheel or the nose would
+    /// have passed a wall.
+    collisions: u32,
+}
+
+impl SimRobot {
+    pub fn new(cfg: SimConfig) -> SimRobot {
+        let sensors = SimSensors::new();
+        let (mut front, mut right, mut compass) = sensors.drivers();
+        let mut rng = Rng::new(cfg.seed);
+        // the chips see the start pose during bring-up
+        set_truth(&sensors, &cfg, &cfg.start, &mut rng);
+        // bring-up results show in the loop's health: a chip that failed
+        // here fails its first poll and is re-initialised by the loop
+        let _ = crate::driver::lidar::bring_up(&mut front, &mut right);
+        let _ = compass.reinit();
+        // the firmware knows the arena it is in (its estimator uses the walls)
+        let arena = crate::model::measurement::Arena {
+            length_x: Length::from_mm_f64(cfg.arena.length_x),
+            width_y: Length::from_mm_f64(cfg.arena.width_y),
+        };
+        let ctl = Controller::new_in(front, right, compass, SimServos::default(), cfg.start.to_pose(), arena);
+        let next_tick_ns = sensors.clock.now_ns();
+        SimRobot { cfg, sensors, ctl, truth: cfg.start, rng, out: Collect::default(), next_tick_ns, collisions: 0 }
+    }
+
+    /// One received serial byte.
+    pub fn feed(&mut self, byte: u8) {
+        self.ctl.feed(byte, &mut self.out);
+    }
+
+    /// A command line (the terminator is added).
+    pub fn send(&mut self, line: &str) {
+        for b in line.bytes() {
+            self.feed(b);
+        }
+        self.feed(b'\n');
+    }
+
+    /// Output lines since the last call.
+    pub fn take_output(&mut self) -> Vec<String> {
+        std::mem::take(&mut self.out.0)
+    }
+
+    /// Simulated time, us since the simulator was created.
+    pub fn now_us(&self) -> u64 {
+        self.sensors.clock.now_ns() / 1_000
+    }
+
+    /// Runs one loop period (see the module docs).
+    pub fn tick(&mut self) {
+        let clock = &self.sensors.clock;
+        // a driver that waited (a re-init's delays) may have pushed the
+        // clock past the schedule: then this tick is late, as on the robot
+        let now_ns = clock.now_ns().max(self.next_tick_ns);
+        clock.advance_ns(now_ns - clock.now_ns());
+        set_truth(&self.sensors, &self.cfg, &self.truth, &mut self.rng);
+        // the loop's wrapping microsecond counter
+        self.ctl.tick((now_ns / 1_000) as u32, &mut self.out);
+        self.next_tick_ns = now_ns + u64::from(TICK_US) * 1_000;
+        // the body moves for one period by what the servos do now
+        let servos = *self.ctl.servos();
+        let motion = config::actuators::MODEL.motion_from_commands(servos.left, servos.right);
+        let dt_s = f64::from(TICK_US) * 1e-6;
+        let noisy = match MotionF64::from_motion(motion) {
+            MotionF64::Stop => MotionF64::Stop,
+            MotionF64::Straight(v) => MotionF64::Straight(v * (1.0 + self.rng.gauss(self.cfg.noise.speed))),
+            MotionF64::Turn(w) => MotionF64::Turn(w * (1.0 + self.rng.gauss(self.cfg.noise.turn))),
+        };
+        let d = config::geometry::ROTATION_TO_REFERENCE.to_mm_f64();
+        let next = advance(&self.truth, noisy, dt_s, self.cfg.kinematics, d);
+        if self.fits(&next) {
+            self.truth = next;
+        } else {
+            self.collisions = self.collisions.saturating_add(1);
+        }
+        let clock = &self.sensors.clock;
+        clock.advance_ns(self.next_tick_ns.saturating_sub(clock.now_ns()));
+    }
+
+    /// True when the nose (reference point) and both wheels are inside the arena.
+    fn fits(&self, p: &PoseF64) -> bool {
+        let d = config::geometry::ROTATION_TO_REFERENCE.to_mm_f64();
+        let (s, c) = p.theta.sin_cos();
+        let (ax, ay) = (p.x - d * c, p.y - d * s);
+        let h = config::sim::HALF_TRACK_MM;
+        let a = &self.cfg.arena;
+        a.contains(p.x, p.y) && a.contains(ax - h * s, ay + h * c) && a.contains(ax + h * s, ay - h * c)
+    }
+
+    /// Runs `script` (times from now) for `duration_us` of simulated time,
+    /// recording a [`Sample`] every `record_every` ticks and handing every
+    /// output line to `on_line`.
+    pub fn run_script(
+        &mut self,
+        script: &Script,
+        duration_us: u64,
+        record_every: u32,
+        mut on_line: impl FnMut(&str),
+    ) -> Vec<Sample> {
+        let start = self.now_us();
+        let ticks = duration_us / u64::from(TICK_US);
+        let mut next_line = script.lines.iter().peekable();
+        let mut samples = Vec::new();
+        for i in 0..=ticks {
+            let t = self.now_us().saturating_sub(start);
+            while let Some(l) = next_line.next_if(|l| l.at_us <= t) {
+                self.send(&l.command);
+            }
+            if i % u64::from(record_every.max(1)) == 0 || i == ticks {
+                samples.push(self.sample());
+            }
+            if i < ticks {
+                self.tick();
+            }
+            for line in self.take_output() {
+                on_line(&line);
+            }
+        }
+        samples
+    }
+
+    /// The truth and the firmware's estimate now.
+    pub fn sample(&self) -> Sample {
+        Sample {
+            t_us: self.now_us(),
+            truth: self.truth,
+            estimate: PoseF64::from_pose(&self.ctl.pose()),
+            dead_reckoned: PoseF64::from_pose(&self.ctl.dead_reckoned()),
+        }
+    }
+
+    /// The true pose.
+    pub fn truth(&self) -> PoseF64 {
+        self.truth
+    }
+    /// Moves the robot (e.g. a test's start), without telling the firmware.
+    pub fn set_truth(&mut self, p: PoseF64) {
+        self.truth = p;
+    }
+    pub fn controller(&self) -> &SimController {
+        &self.ctl
+    }
+    pub fn controller_mut(&mut self) -> &mut SimController {
+        &mut self.ctl
+    }
+    /// Ticks whose motion a wall stopped.
+    pub fn collisions(&self) -> u32 {
+        self.collisions
+    }
+}
+
+/// Sets the fake chips' truth for the body at `p`.
+fn set_truth(sensors: &SimSensors, cfg: &SimConfig, p: &PoseF64, rng: &mut Rng) {
+    let lidar = |mount: &LidarMount, model: &LidarModel, rng: &mut Rng| -> u16 {
+        let (x, y, dir) = p.lidar_ray(mount);
+        let Some(t) = cfg.arena.ray_cast(x, y, dir) else { return crate::model::lidar::NO_TARGET_READING };
+        // the model gives the distance from the reference point along the
+        // beam: the ray from the mount plus how far the mount sits ahead
+        // of the reference point along its own beam
+        let (bs, bc) = mount.direction.to_radians_f64().sin_cos();
+        let along = mount.forward.to_mm_f64() * bc + mount.right.to_mm_f64() * bs;
+        let distance = t + along + rng.gauss(cfg.noise.lidar_mm);
+        model.reading_for(Length::from_mm_f64(distance)).unwrap_or(0).min(crate::model::lidar::NO_TARGET_READING)
+    };
+    let front = lidar(&config::geometry::FRONT_LIDAR, &config::lidar::FRONT, rng);
+    let right = lidar(&config::geometry::RIGHT_LIDAR, &config::lidar::RIGHT, rng);
+    sensors.front.borrow_mut().set_distance_mm(front);
+    sensors.right.borrow_mut().set_distance_mm(right);
+    sensors.mpu.borrow_mut().ak.set_field_adjusted(field_for(p.theta, cfg.noise.compass_deg, rng));
+}
+
+/// The ASA-adjusted counts (chip axes) the AK8963 reads at true heading
+/// `theta` (radians clockwise from north), with heading noise: the earth
+/// field in the car's frame, mapped to the chip's axes, then distorted by
+/// the inverse of the configured calibration (`adj = corrected / scale + bias`).
+pub fn field_for(theta: f64, noise_deg: f64, rng: &mut Rng) -> [i32; 3] {
+    let m = &config::compass::MODEL;
+    // magnetic heading: true heading minus the (east) declination
+    let psi = theta - m.declination.to_radians_f64() + rng.gauss(noise_deg).to_radians();
+    let b = config::sim::FIELD_HORIZONTAL_COUNTS;
+    // north seen from the car: (forward, right) = (cos psi, -sin psi)
+    let (forward, right) = (b * psi.cos(), -b * psi.sin());
+    let mut chip = [0.0f64; 3];
+    chip[2] = config::sim::FIELD_DOWN_COUNTS;
+    for (axis, v) in [(m.axes.forward, forward), (m.axes.right, right)] {
+        if let Some(c) = chip.get_mut(usize::from(axis.index)) {
+            *c = if axis.negate { -v } else { v };
+        }
+    }
+    let cal = &m.calibration;
+    let mut adj = [0i32; 3];
+    for i in 0..3 {
+        let scale = f64::from(cal.scale_q16[i]) / 65536.0;
+        adj[i] = (chip[i] / scale + f64::from(cal.bias[i])).round() as i32;
+    }
+    adj
+}
