@@ -30,11 +30,8 @@ fn sweep(turns: f64, n: u16) -> MagCalibrator {
     for k in 0..n {
         let t = turns * std::f64::consts::TAU * f64::from(k) / f64::from(n);
         let status = cal.feed(sample(t));
-        let want = if k + 1 >= config::compass::CALIBRATION_SAMPLES {
-            CalStatus::Done
-        } else {
-            CalStatus::Collecting(k + 1)
-        };
+        let want =
+            if k + 1 >= config::compass::CALIBRATION_SAMPLES { CalStatus::Done } else { CalStatus::Collecting(k + 1) };
         assert_eq!(status, want);
     }
     cal
@@ -132,7 +129,11 @@ fn the_config_line_reproduces_the_report_constant_and_round_trips() {
         "pub const CALIBRATION: MagCalibration = MagCalibration::from_f64([79.0, 35.0, 2.0], [0.679016, 0.833328, 3.055557]);"
     );
     // Any calibration survives print -> from_f64.
-    for cal in [config::compass::CALIBRATION, sweep(2.0, 1000).result().unwrap(), MagCalibration { bias: [-5, 0, 123], scale_q16: [1, 65536, 9_999_999] }] {
+    for cal in [
+        config::compass::CALIBRATION,
+        sweep(2.0, 1000).result().unwrap(),
+        MagCalibration { bias: [-5, 0, 123], scale_q16: [1, 65536, 9_999_999] },
+    ] {
         let line = ConfigLine(&cal).to_string();
         let nums: Vec<f64> = line
             .split(|c: char| !(c.is_ascii_digit() || c == '.' || c == '-'))

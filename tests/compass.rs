@@ -79,9 +79,11 @@ fn a_read_applies_asa_calibration_axes_and_declination_in_integers() {
     // f64 reference of the whole path.
     let cal = config::compass::CALIBRATION;
     let adj = [750.0, -475.0, 449.0];
-    let f: Vec<f64> = (0..3).map(|i| (adj[i] - f64::from(cal.bias[i])) * f64::from(cal.scale_q16[i]) / 65536.0).collect();
+    let f: Vec<f64> =
+        (0..3).map(|i| (adj[i] - f64::from(cal.bias[i])) * f64::from(cal.scale_q16[i]) / 65536.0).collect();
     assert!((f64::from(s.field.x) - f[0]).abs() <= 1.0 && (f64::from(s.field.y) - f[1]).abs() <= 1.0);
-    let want = ((-f[1]).atan2(f[0]).to_degrees() + config::compass::DECLINATION.to_radians_f64().to_degrees() + 360.0) % 360.0;
+    let want =
+        ((-f[1]).atan2(f[0]).to_degrees() + config::compass::DECLINATION.to_radians_f64().to_degrees() + 360.0) % 360.0;
     let got = f64::from(s.heading.to_millidegrees()) / 1000.0;
     assert!((got - want).abs() < 0.2, "{got} vs {want}");
     finish(c);

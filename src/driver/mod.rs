@@ -79,3 +79,4 @@ pub mod bus;
 pub mod calibration;
 pub mod compass;
 pub mod lidar;
+pub mod servo;
