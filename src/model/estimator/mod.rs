@@ -45,12 +45,15 @@
 //!   at least the incidence limit's). Predict has none.
 //!
 //! # Cost (lx106, no 32x32->64 multiply)
-//! Predict: two [`sin_cos`] for a turn (one for straight) inside [`step`],
-//! one more for the turn's Jacobian, and about 20 [`mul_hi`] (~10
-//! instructions each); no 64-bit multiply, no division. A correction: a
-//! lidar's [`Beam`] (two `sin_cos`, ~10 `mul_hi`), 14 64-bit multiplies
-//! (~40 instructions each) and one 64-bit division; the compass skips the
-//! geometry and 4 of the multiplies.
+//! Predict: [`step`] (one [`sin_cos`] going straight, two turning), one or
+//! two more `sin_cos` for the Jacobian and noise, and about 16 [`mul_hi`]
+//! (~10 instructions each); no 64-bit multiply, no division.
+//! A correction: 19 64-bit multiplies (~40 instructions each, all of
+//! operands proven to fit, see the comments) and the one 64-bit division;
+//! a lidar adds its [`Beam`] (two `sin_cos`, ~10 `mul_hi`, 3 64-bit
+//! multiplies for the corner test). Estimated: predict under 1000
+//! instructions, a correction 1500-2500 depending on the division routine;
+//! the lx106 counts are the lead's benchmark's to confirm.
 
 #[cfg(feature = "std")]
 pub mod replay;
