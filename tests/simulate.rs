@@ -17,7 +17,7 @@ use std::f64::consts::{FRAC_PI_2, PI};
 #[test]
 fn ray_cast_hits_the_expected_wall() {
     let a = Arena::new(762.5, 495.0);
-    let d = |deg: f64| (deg as f64).to_radians();
+    let d = |deg: f64| deg.to_radians();
     // (x, y, heading deg) -> distance
     let table = [
         (100.0, 100.0, 0.0, 662.5),                // north wall

@@ -117,7 +117,7 @@ const PAUSE_MS: u64 = 250;
 pub fn default_script(duration_s: f64) -> String {
     let end_ms = (duration_s.max(0.0) * 1000.0) as u64;
     let mut s = String::new();
-    let _ = writeln!(s, "# built-in lap around the {} box (x north, y east)", "762.5 x 495 mm");
+    let _ = writeln!(s, "# built-in: laps clockwise around the default box (x north, y east)");
     let _ = writeln!(s, "@0ms rate 10");
     let mut t = 0u64;
     'laps: loop {
