@@ -573,6 +573,8 @@ fn calibration_turns_in_place_applies_and_prints_the_result() {
     assert!(lines[1].starts_with("# pub const CALIBRATION: MagCalibration = MagCalibration::from_f64([79.0, 35.0, "));
     let cal = ctl.compass().calibration;
     assert_eq!(&cal.bias[..2], &[79, 35]);
+    // the line is the driver's ConfigLine, written without core::fmt
+    assert_eq!(lines[1], format!("# {}", paperbot::driver::calibration::ConfigLine(&cal)));
     ctl.tick(3_000_000, &mut out);
     assert_eq!(servos(&mut ctl), neutral());
 }

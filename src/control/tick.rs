@@ -40,11 +40,13 @@
 use heapless::String;
 
 use crate::config;
+use crate::control::protocol::number::{push_fixed_parts, push_str, push_u32, TextOut};
+use crate::control::protocol::Overflow;
 use crate::control::protocol::{
     format_response, format_status, format_telemetry, telemetry_header, Command, FaultCounters, LineBuffer, ParseError,
     Response, Side, Status, Telemetry, HELP, MAX_OUT_LINE,
 };
-use crate::driver::calibration::{CalStatus, CalibrationError, ConfigLine, MagCalibrator};
+use crate::driver::calibration::{CalStatus, CalibrationError, MagCalibrator};
 use crate::driver::{CompassSample, HeadingSensor, LidarSample, MagCalibrate, SensorError, Servos};
 use crate::math::{Coord, Dt, Length, TurnRate};
 use crate::model::compass::MagCalibration;
@@ -606,36 +608,45 @@ where
     /// Ends a calibration sweep: applies and prints a good result, reports
     /// a bad one (`None`: abandoned for another command). The robot stops.
     fn end_calibration(&mut self, result: Option<Result<MagCalibration, CalibrationError>>, sink: &mut impl LineSink) {
-        use core::fmt::Write;
         let (samples, sectors) = self.calibrator.map(|c| (c.samples(), c.sectors())).unwrap_or((0, 0));
         self.calibrator = None;
         self.calibration_done = false;
         if matches!(self.mode, Mode::Calibrate { .. }) {
             self.mode = Mode::Idle;
         }
+        // integer formatting (no core::fmt on the robot); a line that does
+        // not fit is cut short, which MAX_OUT_LINE makes impossible here
         let mut text: String<MAX_OUT_LINE> = String::new();
-        // a too-long line is cut short by the String's capacity: write! only fails then
+        let t = &mut text;
         let _ = match result {
-            None => write!(text, "calibration abandoned after {samples} samples"),
+            None => push_str(t, "calibration abandoned after ")
+                .and_then(|()| push_u32(t, u32::from(samples)))
+                .and_then(|()| push_str(t, " samples")),
             Some(Ok(cal)) => {
                 self.compass.set_calibration(cal);
-                let _ = write!(
-                    text,
-                    "calibration ok: {samples} samples, {sectors} of 12 sectors; applied. For config::compass:"
-                );
-                self.respond(&Response::Note(&text), sink);
-                text.clear();
-                write!(text, "{}", ConfigLine(&cal))
+                let _ = push_str(t, "calibration ok: ")
+                    .and_then(|()| push_u32(t, u32::from(samples)))
+                    .and_then(|()| push_str(t, " samples, "))
+                    .and_then(|()| push_u32(t, u32::from(sectors)))
+                    .and_then(|()| push_str(t, " of 12 sectors; applied. For config::compass:"));
+                self.respond(&Response::Note(t), sink);
+                t.clear();
+                push_config_line(t, &cal)
             }
-            Some(Err(CalibrationError::NotEnoughSamples { have, need })) => {
-                write!(text, "calibration timed out: {have} of {need} samples")
-            }
+            Some(Err(CalibrationError::NotEnoughSamples { have, need })) => push_str(t, "calibration timed out: ")
+                .and_then(|()| push_u32(t, u32::from(have)))
+                .and_then(|()| push_str(t, " of "))
+                .and_then(|()| push_u32(t, u32::from(need)))
+                .and_then(|()| push_str(t, " samples")),
             Some(Err(CalibrationError::SweepIncomplete { sectors, need })) => {
-                write!(text, "calibration failed: the turn covered {sectors} of 12 sectors, need {need}")
+                push_str(t, "calibration failed: the turn covered ")
+                    .and_then(|()| push_u32(t, u32::from(sectors)))
+                    .and_then(|()| push_str(t, " of 12 sectors, need "))
+                    .and_then(|()| push_u32(t, u32::from(need)))
             }
-            Some(Err(CalibrationError::Degenerate { axis })) => {
-                write!(text, "calibration failed: magnetometer axis {axis} never changed")
-            }
+            Some(Err(CalibrationError::Degenerate { axis })) => push_str(t, "calibration failed: magnetometer axis ")
+                .and_then(|()| push_u32(t, u32::from(axis)))
+                .and_then(|()| push_str(t, " never changed")),
         };
         let response = match result {
             Some(Ok(_)) | None => Response::Note(&text),
@@ -790,3 +801,28 @@ enum Reading {
 
 const _: () = assert!(config::timing::TELEMETRY_HZ <= config::serial::MAX_TELEMETRY_HZ as u32);
 const _: () = assert!((u16::MAX as u64) * (config::compass::CALIBRATION_MS_PER_SAMPLE as u64) <= u32::MAX as u64);
+
+/// The `CALIBRATION` line of `config::compass` for `cal`, ready to paste
+/// (the same text as `driver::calibration::ConfigLine`, written without
+/// `core::fmt`): biases as integers, scales with six decimals.
+fn push_config_line(out: &mut dyn TextOut, cal: &MagCalibration) -> Result<(), Overflow> {
+    push_str(out, "pub const CALIBRATION: MagCalibration = MagCalibration::from_f64([")?;
+    for (i, b) in cal.bias.iter().enumerate() {
+        if i > 0 {
+            push_str(out, ", ")?;
+        }
+        push_fixed_parts(out, *b < 0, b.unsigned_abs(), 0)?;
+        push_str(out, ".0")?;
+    }
+    push_str(out, "], [")?;
+    for (i, q16) in cal.scale_q16.iter().enumerate() {
+        if i > 0 {
+            push_str(out, ", ")?;
+        }
+        // q16 * 10^6 / 2^16 rounded: |q16| < 2^31, the product fits in i64
+        let micro = crate::math::div_round(i64::from(*q16) * 1_000_000, 65536).unwrap_or(0);
+        let magnitude = u32::try_from(micro.unsigned_abs()).unwrap_or(u32::MAX);
+        push_fixed_parts(out, micro < 0, magnitude, 6)?;
+    }
+    push_str(out, "]);")
+}
