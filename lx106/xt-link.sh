@@ -69,8 +69,24 @@ assemble "$asm" "$out.gas.o"
 stem="$(basename "$out")."
 new=()
 replaced=0
+# The repository's own .cargo/config.toml (a parent directory's: cargo merges
+# it) adds `-nostartfiles -Wl,-Tlink.x` for the firmware; build.rs passes
+# the same for this crate. GNU ld refuses a linker script given twice, so
+# keep the first of each.
+declare -A seen_script=()
+seen_nostart=0
 for a in "${args[@]}"; do
   base="$(basename -- "$a")"
+  script=""
+  case "$a" in -Wl,-T*) script="${a#-Wl,-T}" ;; -T?*) script="${a#-T}" ;; esac
+  if [[ -n "$script" ]]; then
+    [[ -n "${seen_script[$script]:-}" ]] && continue
+    seen_script[$script]=1
+  fi
+  if [[ "$a" == -nostartfiles ]]; then
+    (( seen_nostart )) && continue
+    seen_nostart=1
+  fi
   if [[ "$a" == *.rcgu.o && "$base" == "$stem"* ]]; then
     if (( replaced )); then
       echo "xt-link: more than one codegen unit ($a); set codegen-units = 1 and lto = \"fat\"" >&2
