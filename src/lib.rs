@@ -16,6 +16,8 @@ extern crate std;
 pub mod config;
 pub mod control;
 pub mod driver;
+#[cfg(feature = "std")]
+pub mod host;
 pub mod math;
 pub mod model;
 #[cfg(feature = "sim")]

@@ -12,5 +12,6 @@ pub mod noise;
 pub mod robot;
 pub mod script;
 pub mod sensors;
+pub mod serve;
 pub mod svg;
 pub mod vl53l0x;

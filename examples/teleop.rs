@@ -1,0 +1,356 @@
+//! Drive the paperbot from a laptop over its USB serial line: a terminal
+//! UI with live telemetry, or a plain line mode for scripts; either one
+//! records the session for the replay tool.
+//!
+//! ```text
+//! cargo run --example teleop -- [PORT] [options]
+//!   PORT             the robot's serial port, e.g. /dev/ttyUSB0 (default: the only USB serial port)
+//!   --list           list the serial ports and exit
+//!   --baud N         baud rate (default 115200, config::serial::BAUD)
+//!   --record FILE    record the drive as a replay log (cargo run --example replay -- FILE)
+//!   --raw FILE       also keep every line the robot sends (telemetry CSV and # lines)
+//!   --rate HZ        telemetry rate to ask for (default 50 when recording, else the robot's)
+//!   --lines FILE     line mode: send FILE's commands ('-' = stdin), print what comes back
+//!   --linger S       line mode: listen S seconds after the last command (default 1)
+//!   --no-keepalive   line mode: do not repeat untimed motions (the deadman cuts them)
+//! ```
+//! Keys: arrows / WASD drive, space stops, + / - speed level, q quits.
+
+use std::fs::File;
+use std::io::{self, BufWriter, Read, Write};
+use std::process::ExitCode;
+use std::time::{Duration, Instant};
+
+use paperbot::config;
+use paperbot::host::teleop::{
+    action, keys, link, parse_plan, run_line_mode, Action, Dashboard, Driver, Key, LineModeOptions, LineReader, Panel,
+    Recorder,
+};
+use ratatui::crossterm::event::{self, Event, KeyCode, KeyEventKind, KeyModifiers};
+use ratatui::layout::{Constraint, Layout};
+use ratatui::widgets::{Block, Paragraph};
+use serialport::{SerialPort, SerialPortType};
+
+/// Read timeout of the port: the UI loop's pace when no key comes, ms.
+const POLL_MS: u64 = 5;
+
+#[derive(Default)]
+struct Args {
+    port: Option<String>,
+    list: bool,
+    baud: u32,
+    record: Option<String>,
+    raw: Option<String>,
+    rate: Option<u16>,
+    lines: Option<String>,
+    linger_s: f64,
+    keepalive: bool,
+}
+
+fn parse_args() -> Result<Args, String> {
+    let mut a = Args { baud: config::serial::BAUD, linger_s: 1.0, keepalive: true, ..Args::default() };
+    let mut it = std::env::args().skip(1);
+    while let Some(flag) = it.next() {
+        let mut value = |name: &str| it.next().ok_or(format!("{name} needs a value"));
+        match flag.as_str() {
+            "--list" => a.list = true,
+            "--baud" => a.baud = value("--baud")?.parse().map_err(|_| "--baud wants an integer")?,
+            "--record" => a.record = Some(value("--record")?),
+            "--raw" => a.raw = Some(value("--raw")?),
+            "--rate" => a.rate = Some(value("--rate")?.parse().map_err(|_| "--rate wants 0..100")?),
+            "--lines" => a.lines = Some(value("--lines")?),
+            "--linger" => {
+                a.linger_s = value("--linger")?.parse().map_err(|_| "--linger wants seconds")?;
+                if !(0.0..=3600.0).contains(&a.linger_s) {
+                    return Err("--linger wants 0..3600 s".into());
+                }
+            }
+            "--no-keepalive" => a.keepalive = false,
+            "-h" | "--help" => return Err(String::new()),
+            f if f.starts_with('-') && f != "-" => return Err(format!("unknown option {f}")),
+            p if a.port.is_none() => a.port = Some(p.to_string()),
+            p => return Err(format!("one port only ({p}?)")),
+        }
+    }
+    Ok(a)
+}
+
+fn usage() -> String {
+    include_str!("teleop.rs")
+        .lines()
+        .skip(4)
+        .take(14)
+        .map(|l| l.strip_prefix("//! ").unwrap_or(l.trim_start_matches("//!")))
+        .filter(|l| !l.starts_with("```"))
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+/// USB serial chips of the usual ESP8266 boards.
+fn board_hint(vid: u16, pid: u16) -> &'static str {
+    match (vid, pid) {
+        (0x10c4, 0xea60) => " (CP210x: NodeMCU?)",
+        (0x1a86, 0x7523) => " (CH340: NodeMCU / Wemos?)",
+        (0x0403, 0x6001) => " (FTDI)",
+        _ => "",
+    }
+}
+
+fn list_ports() -> Result<Vec<(String, bool)>, String> {
+    let ports = serialport::available_ports().map_err(|e| format!("cannot list ports: {e}"))?;
+    Ok(ports
+        .into_iter()
+        .map(|p| {
+            let usb = matches!(p.port_type, SerialPortType::UsbPort(_));
+            let desc = match &p.port_type {
+                SerialPortType::UsbPort(u) => format!(
+                    "{}  USB {:04x}:{:04x} {}{}",
+                    p.port_name,
+                    u.vid,
+                    u.pid,
+                    u.product.as_deref().unwrap_or(""),
+                    board_hint(u.vid, u.pid)
+                ),
+                t => format!("{}  {t:?}", p.port_name),
+            };
+            (desc, usb)
+        })
+        .collect())
+}
+
+fn pick_port(args: &Args) -> Result<String, String> {
+    if let Some(p) = &args.port {
+        return Ok(p.clone());
+    }
+    let usb: Vec<String> = serialport::available_ports()
+        .map_err(|e| format!("cannot list ports: {e}"))?
+        .into_iter()
+        .filter(|p| matches!(p.port_type, SerialPortType::UsbPort(_)))
+        .map(|p| p.port_name)
+        .collect();
+    match usb.as_slice() {
+        [one] => Ok(one.clone()),
+        [] => Err("no USB serial port found: plug the robot in, or name the port (see --list)".into()),
+        many => Err(format!("several USB serial ports ({}): name one", many.join(", "))),
+    }
+}
+
+/// Writes to stdout and, if set, a raw log.
+struct Tee<A: Write, B: Write>(A, Option<B>);
+
+impl<A: Write, B: Write> Write for Tee<A, B> {
+    fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
+        self.0.write_all(buf)?;
+        if let Some(b) = self.1.as_mut() {
+            b.write_all(buf)?;
+        }
+        Ok(buf.len())
+    }
+    fn flush(&mut self) -> io::Result<()> {
+        self.0.flush()?;
+        self.1.as_mut().map_or(Ok(()), Write::flush)
+    }
+}
+
+fn create(path: &str) -> Result<BufWriter<File>, String> {
+    File::create(path).map(BufWriter::new).map_err(|e| format!("{path}: {e}"))
+}
+
+fn key_of(code: KeyCode, mods: KeyModifiers) -> Option<Key> {
+    Some(match code {
+        KeyCode::Up => Key::Up,
+        KeyCode::Down => Key::Down,
+        KeyCode::Left => Key::Left,
+        KeyCode::Right => Key::Right,
+        KeyCode::Esc => Key::Esc,
+        KeyCode::Char('c') if mods.contains(KeyModifiers::CONTROL) => Key::CtrlC,
+        KeyCode::Char(c) => Key::Char(c),
+        _ => return None,
+    })
+}
+
+fn draw(frame: &mut ratatui::Frame, panels: &[Panel], help: bool) {
+    fn para(p: &Panel) -> Paragraph<'_> {
+        Paragraph::new(p.lines.join("\n")).block(Block::bordered().title(p.title.as_str()))
+    }
+    let height = |ps: &[&Panel]| ps.iter().map(|p| p.lines.len()).max().unwrap_or(1) as u16 + 2;
+    let find = |t: &str| panels.iter().find(|p| p.title == t);
+    let (Some(link), Some(pose), Some(sensors), Some(faults), Some(drive), Some(msgs)) =
+        (find("link"), find("pose and motion"), find("sensors"), find("faults"), find("drive"), find("messages"))
+    else {
+        return;
+    };
+    let help_panel = Panel { title: "keys".into(), lines: keys::HELP.iter().map(|s| s.to_string()).collect() };
+    let rows = Layout::vertical([
+        Constraint::Length(height(&[pose, sensors])),
+        Constraint::Length(height(&[link, faults])),
+        Constraint::Length(height(&[drive])),
+        Constraint::Min(3),
+        Constraint::Length(if help { height(&[&help_panel]) } else { 0 }),
+    ])
+    .split(frame.area());
+    let halves = |i: usize| Layout::horizontal([Constraint::Percentage(50), Constraint::Percentage(50)]).split(rows[i]);
+    let top = halves(0);
+    frame.render_widget(para(pose), top[0]);
+    frame.render_widget(para(sensors), top[1]);
+    let mid = halves(1);
+    frame.render_widget(para(link), mid[0]);
+    frame.render_widget(para(faults), mid[1]);
+    frame.render_widget(para(drive), rows[2]);
+    frame.render_widget(para(msgs), rows[3]);
+    if help {
+        frame.render_widget(para(&help_panel), rows[4]);
+    }
+}
+
+/// The terminal UI until the user quits.
+fn run_tui(
+    port: &mut dyn SerialPort,
+    recorder: &mut Option<Recorder<BufWriter<File>>>,
+    raw: &mut Option<BufWriter<File>>,
+    record_name: Option<&str>,
+) -> io::Result<()> {
+    let mut terminal = ratatui::init();
+    let start = Instant::now();
+    let now_ms = || start.elapsed().as_millis() as u64;
+    let mut driver = Driver::from_config();
+    let mut dash = Dashboard::new();
+    let mut reader = LineReader::new();
+    let mut help = true;
+    let mut next_frame = 0u64;
+    let result = (|| -> io::Result<()> {
+        loop {
+            while event::poll(Duration::ZERO)? {
+                let Event::Key(k) = event::read()? else { continue };
+                if k.kind == KeyEventKind::Release {
+                    continue;
+                }
+                match key_of(k.code, k.modifiers).and_then(action) {
+                    Some(Action::Drive(kind)) => driver.set(kind),
+                    Some(Action::Faster) => {
+                        driver.faster();
+                    }
+                    Some(Action::Slower) => {
+                        driver.slower();
+                    }
+                    Some(Action::ResetPose) => link::send(port, "reset")?,
+                    Some(Action::Status) => link::send(port, "status")?,
+                    Some(Action::ToggleHelp) => help = !help,
+                    Some(Action::Quit) => return Ok(()),
+                    None => {}
+                }
+            }
+            let now = now_ms();
+            if let Some(cmd) = driver.poll(now) {
+                link::send(port, &cmd)?;
+            }
+            for line in reader.poll(port)? {
+                if let Some(r) = raw.as_mut() {
+                    writeln!(r, "{line}")?;
+                }
+                if let Some(row) = dash.on_line(&line, now) {
+                    if let Some(rec) = recorder.as_mut() {
+                        rec.record(&row)?;
+                    }
+                }
+            }
+            if now >= next_frame {
+                next_frame = now + u64::from(config::teleop::FRAME_MS);
+                let rec = recorder
+                    .as_ref()
+                    .map(|r| format!("{}: {} rows ({} skipped)", record_name.unwrap_or("?"), r.rows(), r.skipped()));
+                let panels = dash.panels(now, &driver, rec.as_deref());
+                terminal.draw(|f| draw(f, &panels, help))?;
+            }
+        }
+    })();
+    // stop the robot whatever happened, then give the terminal back
+    let stopped = link::send(port, "stop");
+    ratatui::restore();
+    result.and(stopped)
+}
+
+fn run() -> Result<(), String> {
+    let args = parse_args()?;
+    if args.list {
+        for (desc, _) in list_ports()? {
+            println!("{desc}");
+        }
+        return Ok(());
+    }
+    let plan = match &args.lines {
+        None => None,
+        Some(path) => {
+            let mut text = String::new();
+            let read = if path == "-" {
+                io::stdin().read_to_string(&mut text).map(|_| ())
+            } else {
+                std::fs::read_to_string(path).map(|t| text = t)
+            };
+            read.map_err(|e| format!("{path}: {e}"))?;
+            Some(parse_plan(&text).map_err(|e| format!("{path}: {e}"))?)
+        }
+    };
+    let port_name = pick_port(&args)?;
+    let mut port = serialport::new(&port_name, args.baud)
+        .timeout(Duration::from_millis(POLL_MS))
+        .open()
+        .map_err(|e| format!("{port_name}: {e}"))?;
+    // what the robot sent before we listened (boot text, old rows) is stale
+    let _ = port.clear(serialport::ClearBuffer::Input);
+    let mut recorder = match &args.record {
+        None => None,
+        Some(path) => Some(Recorder::new(create(path)?).map_err(|e| format!("{path}: {e}"))?),
+    };
+    let mut raw = args.raw.as_deref().map(create).transpose()?;
+    let rate = args.rate.or(recorder.as_ref().map(|_| config::teleop::RECORD_TELEMETRY_HZ));
+
+    match plan {
+        Some(plan) => {
+            let opts = LineModeOptions {
+                linger_ms: (args.linger_s * 1000.0) as u64,
+                keepalive: args.keepalive,
+                rate_hz: rate,
+                ..LineModeOptions::default()
+            };
+            let mut out = Tee(io::stdout().lock(), raw.take());
+            let report = run_line_mode(&mut *port, plan, opts, &mut out, recorder.as_mut())
+                .map_err(|e| format!("{port_name}: {e}"))?;
+            eprintln!(
+                "teleop: sent {} lines and {} keep-alive repeats; {} telemetry rows, {} refused",
+                report.sent, report.refreshes, report.rows, report.errors
+            );
+        }
+        None => {
+            use std::io::IsTerminal;
+            if !io::stdout().is_terminal() || !io::stdin().is_terminal() {
+                return Err("not a terminal: use --lines FILE (or '-' for stdin) for the line mode".into());
+            }
+            if let Some(hz) = rate {
+                link::send(&mut *port, &format!("rate {hz}")).map_err(|e| format!("{port_name}: {e}"))?;
+            }
+            run_tui(&mut *port, &mut recorder, &mut raw, args.record.as_deref())
+                .map_err(|e| format!("{port_name}: {e}"))?;
+        }
+    }
+    if let (Some(rec), Some(path)) = (&recorder, &args.record) {
+        eprintln!("teleop: {} rows recorded in {path} ({} skipped: time went back)", rec.rows(), rec.skipped());
+        if let Some(start) = rec.replay_start() {
+            eprintln!("teleop: replay it with `cargo run --example replay -- {path} --start {start}`");
+        }
+    }
+    Ok(())
+}
+
+fn main() -> ExitCode {
+    match run() {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            if !e.is_empty() {
+                eprintln!("teleop: {e}");
+            }
+            eprintln!("{}", usage());
+            ExitCode::from(2)
+        }
+    }
+}

@@ -1,0 +1,221 @@
+//! What the terminal shows, as plain text: the newest telemetry row
+//! (pose, motion, sensors, fault counters), link health, the recent
+//! messages (`#` lines), and the driver's state. The terminal layer draws
+//! each [`Panel`] in a box; tests read the text.
+//!
+//! Every line from the robot goes through [`Dashboard::on_line`], which
+//! returns the parsed row (for the recorder). Refresh acknowledgements
+//! (`# ok` repeating the previous `# ok`) are counted, not shown, so the
+//! messages keep what matters: refusals, notes, status, help, boot text.
+
+use std::collections::VecDeque;
+use std::format;
+use std::string::{String, ToString};
+use std::vec::Vec;
+
+use super::drive::Driver;
+use crate::config;
+use crate::control::protocol::{classify_line, parse_telemetry_row, telemetry, LineKind, TelemetryRow, ERR, OK};
+
+/// A titled box of text lines.
+#[derive(Clone, PartialEq, Eq, Debug)]
+pub struct Panel {
+    pub title: String,
+    pub lines: Vec<String>,
+}
+
+/// Counts and the newest state of the link.
+#[derive(Clone, Debug, Default)]
+pub struct Dashboard {
+    last: Option<TelemetryRow>,
+    last_row_ms: Option<u64>,
+    rows: u64,
+    /// Lines that were neither `#` lines, the header nor a telemetry row.
+    bad: u64,
+    oks: u64,
+    errs: u64,
+    headers: u64,
+    last_ok: Option<String>,
+    messages: VecDeque<String>,
+    max_messages: usize,
+}
+
+fn dmm(v: i32) -> String {
+    let sign = if v < 0 { "-" } else { "" };
+    format!("{sign}{}.{}", v.unsigned_abs() / 10, v.unsigned_abs() % 10)
+}
+fn milli(v: i32) -> String {
+    let sign = if v < 0 { "-" } else { "" };
+    format!("{sign}{}.{:03}", v.unsigned_abs() / 1000, v.unsigned_abs() % 1000)
+}
+fn centi(v: u32) -> String {
+    format!("{}.{:02}", v / 100, v % 100)
+}
+fn opt<T>(v: Option<T>, f: impl Fn(T) -> String) -> String {
+    v.map_or_else(|| String::from("-"), f)
+}
+
+impl Dashboard {
+    pub fn new() -> Dashboard {
+        Dashboard { max_messages: config::teleop::MESSAGES_SHOWN, ..Dashboard::default() }
+    }
+
+    /// Takes one line from the robot (received at `now_ms`); returns the
+    /// telemetry row it holds, if it is one.
+    pub fn on_line(&mut self, line: &str, now_ms: u64) -> Option<TelemetryRow> {
+        let line = line.trim_end_matches(['\r', '\n']);
+        match classify_line(line) {
+            LineKind::Header => {
+                self.headers = self.headers.saturating_add(1);
+                None
+            }
+            LineKind::Comment => {
+                if line.starts_with(OK) {
+                    self.oks = self.oks.saturating_add(1);
+                    if self.last_ok.as_deref() == Some(line) {
+                        return None; // a refresh's acknowledgement
+                    }
+                    self.last_ok = Some(line.to_string());
+                } else if line.starts_with(ERR) {
+                    self.errs = self.errs.saturating_add(1);
+                }
+                self.message(line.to_string());
+                None
+            }
+            LineKind::Row => match parse_telemetry_row(line) {
+                Ok(row) => {
+                    self.rows = self.rows.saturating_add(1);
+                    self.last = Some(row);
+                    self.last_row_ms = Some(now_ms);
+                    Some(row)
+                }
+                Err(_) if line.trim().is_empty() => None,
+                Err(_) => {
+                    self.bad = self.bad.saturating_add(1);
+                    self.message(format!("? {line}"));
+                    None
+                }
+            },
+        }
+    }
+
+    /// Adds a line to the messages (the oldest goes when full).
+    pub fn message(&mut self, text: String) {
+        if self.messages.len() >= self.max_messages.max(1) {
+            self.messages.pop_front();
+        }
+        self.messages.push_back(text);
+    }
+
+    pub fn last_row(&self) -> Option<&TelemetryRow> {
+        self.last.as_ref()
+    }
+    pub fn rows(&self) -> u64 {
+        self.rows
+    }
+    pub fn errors(&self) -> u64 {
+        self.errs
+    }
+    pub fn bad_lines(&self) -> u64 {
+        self.bad
+    }
+    pub fn messages(&self) -> impl Iterator<Item = &str> {
+        self.messages.iter().map(String::as_str)
+    }
+
+    /// True when no row came for [`config::teleop::STALE_LINK_MS`] (or none yet).
+    pub fn stale(&self, now_ms: u64) -> bool {
+        self.last_row_ms.is_none_or(|t| now_ms.saturating_sub(t) > u64::from(config::teleop::STALE_LINK_MS))
+    }
+
+    /// The screen: link, pose and motion, sensors, faults, messages.
+    /// `recording` is a one-line recorder state (e.g. `drive.csv: 120 rows`).
+    pub fn panels(&self, now_ms: u64, driver: &Driver, recording: Option<&str>) -> Vec<Panel> {
+        let mut out = Vec::new();
+        let link = if self.last_row_ms.is_none() {
+            String::from("waiting for telemetry")
+        } else if self.stale(now_ms) {
+            format!("STALE: no telemetry for {} ms", now_ms.saturating_sub(self.last_row_ms.unwrap_or(0)))
+        } else {
+            String::from("ok")
+        };
+        out.push(Panel {
+            title: String::from("link"),
+            lines: [
+                format!("telemetry {link}"),
+                format!("rows {}  ok {}  err {}  bad {}", self.rows, self.oks, self.errs, self.bad),
+                format!("sent {}  last `{}`", driver.sent(), driver.last_sent().unwrap_or("-")),
+                format!("record {}", recording.unwrap_or("off")),
+            ]
+            .into(),
+        });
+        let r = self.last.as_ref();
+        out.push(Panel {
+            title: String::from("pose and motion"),
+            lines: match r {
+                None => ["-".to_string()].into(),
+                Some(r) => [
+                    format!("t {} ms", r.t_ms),
+                    format!("x {} mm  y {} mm", dmm(r.x_dmm), dmm(r.y_dmm)),
+                    format!("heading {} deg", milli(r.heading_mdeg as i32)),
+                    format!(
+                        "motion {}  v {} m/s  w {} rad/s",
+                        telemetry::motion_word(r.motion),
+                        milli(r.v_mm_s),
+                        milli(r.w_mrad_s)
+                    ),
+                    format!("servos L {}  R {}", centi(r.left_cmd_centi), centi(r.right_cmd_centi)),
+                ]
+                .into(),
+            },
+        });
+        out.push(Panel {
+            title: String::from("sensors"),
+            lines: match r {
+                None => ["-".to_string()].into(),
+                Some(r) => [
+                    format!(
+                        "front raw {} mm  dist {} mm",
+                        opt(r.front_raw_mm, |v| v.to_string()),
+                        opt(r.front_dmm, dmm)
+                    ),
+                    format!(
+                        "right raw {} mm  dist {} mm",
+                        opt(r.right_raw_mm, |v| v.to_string()),
+                        opt(r.right_dmm, dmm)
+                    ),
+                    format!("compass {} deg", opt(r.compass_mdeg, |v| milli(v as i32))),
+                    format!("mag raw {}", opt(r.mag_raw, |m| format!("{} {} {}", m[0], m[1], m[2]))),
+                ]
+                .into(),
+            },
+        });
+        out.push(Panel {
+            title: String::from("faults"),
+            lines: match r {
+                None => ["-".to_string()].into(),
+                Some(r) => {
+                    let f = &r.faults;
+                    [
+                        format!("bus {}  timeout {}  missing {}", f.bus, f.timeout, f.missing),
+                        format!(
+                            "bad sample {}  outliers {}  overruns {}",
+                            f.bad_sample, f.rejected_outliers, f.overruns
+                        ),
+                    ]
+                    .into()
+                }
+            },
+        });
+        out.push(Panel {
+            title: String::from("drive"),
+            lines: [
+                format!("holding `{}`, sent again every {} ms", driver.command(), driver.refresh_ms()),
+                format!("speed {}", driver.speeds().describe()),
+            ]
+            .into(),
+        });
+        out.push(Panel { title: String::from("messages"), lines: self.messages.iter().cloned().collect() });
+        out
+    }
+}
