@@ -248,7 +248,7 @@ fn the_recorded_log_reads_back_in_the_replay_tool() {
 
 // ---- the screen ---------------------------------------------------------------
 
-fn panel<'a>(panels: &'a [paperbot::host::teleop::Panel], title: &str) -> String {
+fn panel(panels: &[paperbot::host::teleop::Panel], title: &str) -> String {
     panels.iter().find(|p| p.title == title).unwrap_or_else(|| panic!("no panel {title}")).lines.join("\n")
 }
 
