@@ -134,7 +134,7 @@ proptest! {
                 prop_assert_eq!(p.theta_frac, total as u16);
                 let dm = paperbot::config::geometry::ROTATION_TO_REFERENCE.to_mm_f64();
                 let th1 = th0 + w.to_rad_s_f64() * t;
-                let (ex, ey) = (-dm * (th0.cos() - th1.cos()), dm * (th0.sin() - th1.sin()));
+                let (ex, ey) = (-dm * (th0.cos() - th1.cos()), -dm * (th0.sin() - th1.sin()));
                 prop_assert!((dx - ex).abs() < 1e-4 && (dy - ey).abs() < 1e-4, "{dx} {dy} vs {ex} {ey}");
             }
         }

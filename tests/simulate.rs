@@ -82,7 +82,7 @@ fn reference(p: PoseF64, motion: Motion, t: f64) -> PoseF64 {
         }
         Motion::Turn(w) => {
             let th = p.theta + w.to_rad_s_f64() * t;
-            PoseF64::new(p.x - d * (p.theta.cos() - th.cos()), p.y + d * (p.theta.sin() - th.sin()), th)
+            PoseF64::new(p.x - d * (p.theta.cos() - th.cos()), p.y - d * (p.theta.sin() - th.sin()), th)
         }
     }
 }
@@ -94,9 +94,9 @@ fn assert_close(what: &str, a: &PoseF64, b: &PoseF64, mm: f64, deg: f64) {
 
 #[test]
 fn a_scripted_drive_without_noise_ends_where_the_f64_reference_does() {
-    // the report's turn geometry: the one the firmware's state update uses
+    // a rigid body turning about its axle: the geometry the firmware's state update uses
     let start = PoseF64::new(150.0, 120.0, 0.0);
-    let mut robot = exact(Kinematics::Report, start);
+    let mut robot = exact(Kinematics::Rigid, start);
     let script = Script::parse(
         "@0 rate 0\n@0 fwd 0.13 2.5\n@3 cw 2.5 0.7\n@4 fwd 0.14 1.2\n@6 ccw 3 0.45\n@7 back 0.13 0.8\n@8 servo 105 105 0.3\n",
     )
@@ -124,7 +124,7 @@ fn a_scripted_drive_without_noise_ends_where_the_f64_reference_does() {
 }
 
 #[test]
-fn rigid_and_report_kinematics_agree_on_straight_lines_and_differ_on_turns() {
+fn the_state_update_follows_a_rigid_turn_not_the_reports_printed_form() {
     let start = PoseF64::new(200.0, 200.0, 0.0);
     let script = Script::parse("@0 fwd 0.13 2\n@2.5 back 0.13 1\n").unwrap();
     let mut rigid = exact(Kinematics::Rigid, start);
@@ -132,8 +132,9 @@ fn rigid_and_report_kinematics_agree_on_straight_lines_and_differ_on_turns() {
     assert_close("straight", &end.truth, &end.dead_reckoned, 0.01, 0.001);
 
     // a quarter turn clockwise from north: a rigid car's reference point
-    // (D ahead of the axle) swings back and to the east; the report's
-    // equations move it back and to the west
+    // (D ahead of the axle) swings back and to the east, and so does the
+    // firmware's state update; the report's printed equations move it back
+    // and to the west
     let quarter = Script::parse("@0 cw 2.493 0.63\n").unwrap();
     let d = ROTATION_TO_REFERENCE.to_mm_f64();
     let mut rigid = exact(Kinematics::Rigid, start);
@@ -143,7 +144,11 @@ fn rigid_and_report_kinematics_agree_on_straight_lines_and_differ_on_turns() {
     let axle = (start.x - d, start.y);
     assert!((r.truth.x - (axle.0 + d * turned.cos())).abs() < 1e-6);
     assert!((r.truth.y - (axle.1 + d * turned.sin())).abs() < 1e-6);
-    assert!(r.truth.y > start.y + 50.0 && r.dead_reckoned.y < start.y - 50.0, "{r:?}");
+    assert!(r.truth.y > start.y + 50.0, "{r:?}");
+    assert_close("rigid turn", &r.truth, &r.dead_reckoned, 0.01, 0.001);
+    let mut printed = exact(Kinematics::Report, start);
+    let p = *printed.run_script(&quarter, 1_000_000, 100, |_| {}).last().unwrap();
+    assert!(p.truth.y < start.y - 50.0 && p.dead_reckoned.y > start.y + 50.0, "{p:?}");
 }
 
 // ---- the fake chips see the truth ----------------------------------

@@ -46,10 +46,11 @@ fn straight_cases_follow_the_heading() {
 }
 
 #[test]
-fn turn_case_is_the_reports_equation() {
+fn turn_case_swings_the_reference_point_about_the_axle() {
     let d = ROTATION_TO_REFERENCE.to_mm_f64();
-    // a quarter turn clockwise from north: theta 0 -> 90 deg
-    // x' = x - D (cos 0 - cos 90) = -D, y' = y + D (sin 0 - sin 90) = -D
+    // a quarter turn clockwise from north: theta 0 -> 90 deg; the reference
+    // point D ahead of the axle swings from north of it to east of it:
+    // x' = x - D (cos 0 - cos 90) = -D, y' = y - D (sin 0 - sin 90) = +D
     let w = TurnRate::from_rad_s_f64(std::f64::consts::FRAC_PI_2); // 90 deg in 1 s
     let mut p = Pose::from_mm(0, 0, Angle::ZERO);
     for _ in 0..20 {
@@ -57,7 +58,7 @@ fn turn_case_is_the_reports_equation() {
     }
     let f = PoseF::of(&p);
     assert!((f.theta.to_degrees() - 90.0).abs() < 1e-4, "{f:?}");
-    assert!((f.x + d).abs() < 1e-3 && (f.y + d).abs() < 1e-3, "{f:?}");
+    assert!((f.x + d).abs() < 1e-3 && (f.y - d).abs() < 1e-3, "{f:?}");
     // and back counter-clockwise returns exactly where it started
     for _ in 0..20 {
         p = step(&p, Motion::Turn(w.neg()), ms(50));

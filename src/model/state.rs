@@ -2,9 +2,14 @@
 //!
 //! Frame: x to north, y to east, heading theta clockwise from north.
 //! - Straight: `x += v t cos(theta)`, `y += v t sin(theta)`.
-//! - Turn in place about the axle, `theta' = theta + w t`:
-//!   `x' = x - D (cos(theta) - cos(theta'))`, `y' = y + D (sin(theta) - sin(theta'))`,
-//!   exactly as the report writes it (D from the config).
+//! - Turn in place about the axle, `theta' = theta + w t`, the reference
+//!   point D ahead of the axle swinging round it:
+//!   `x' = x - D (cos(theta) - cos(theta'))`, `y' = y - D (sin(theta) - sin(theta'))`.
+//!   The x line is the report's; the report prints `y' = y + D (...)`, which
+//!   moves the point the wrong way for every heading but 0 and 180 deg (facing
+//!   north and turning clockwise, the point ahead of the axle moves east, not
+//!   west). No point fixed on the car follows the printed form; a rigid body
+//!   follows this one (see the README and `tests/simulate.rs`).
 //! - Stop: nothing moves.
 //!
 //! Integer only: two [`mul_hi`] products and at most one [`sin_cos`] per
@@ -128,7 +133,7 @@ pub fn advance(pose: &mut Pose, motion: Motion, dt: Dt) {
             // of one step's new heading are the next step's old ones, so a
             // turn telescopes exactly: no rounding builds up.
             pose.x = add_scaled(pose.x, t1.d_cos - t0.d_cos, 10);
-            pose.y = add_scaled(pose.y, t0.d_sin - t1.d_sin, 10);
+            pose.y = add_scaled(pose.y, t1.d_sin - t0.d_sin, 10);
             pose.theta = theta;
             pose.theta_frac = f;
             pose.trig = t1;

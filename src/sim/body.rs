@@ -9,13 +9,14 @@ use crate::model::Motion;
 #[derive(Clone, Copy, PartialEq, Eq, Debug, Default)]
 pub enum Kinematics {
     /// A rigid car: the reference point sits D ahead of the axle midpoint
-    /// and circles it, `p' - p = D (cos th' - cos th, sin th' - sin th)`.
+    /// and circles it, `p' - p = D (cos th' - cos th, sin th' - sin th)`
+    /// (what `model::step` implements).
     #[default]
     Rigid,
-    /// The report's equations as written (section 3.1), which `model::step`
-    /// implements: `x' - x = D (cos th' - cos th)`, `y' - y = D (sin th - sin th')`.
-    /// Its y term has the opposite sign of any rigid point: use it to check
-    /// the firmware's fixed-point arithmetic against the same equations in f64.
+    /// The report's equations as printed (section 3.1):
+    /// `x' - x = D (cos th' - cos th)`, `y' - y = D (sin th - sin th')`.
+    /// Its y term has the opposite sign of any rigid point; kept to show what
+    /// the printed form would do to the firmware's estimate.
     Report,
 }
 

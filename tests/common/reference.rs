@@ -1,4 +1,5 @@
-//! The f64 reference of the report's state update (section 3.1), fed the
+//! The f64 reference of the state update (report section 3.1, with the
+//! sign of its turn's y term corrected: see src/model/state.rs), fed the
 //! exact values of the fixed-point inputs, so a test compares arithmetic.
 
 use paperbot::config::geometry::ROTATION_TO_REFERENCE;
@@ -33,7 +34,7 @@ pub fn step(p: PoseF, motion: Motion, dt: Dt) -> PoseF {
             let th = p.theta + w.to_rad_s_f64() * t;
             PoseF {
                 x: p.x - d * (p.theta.cos() - th.cos()),
-                y: p.y + d * (p.theta.sin() - th.sin()),
+                y: p.y - d * (p.theta.sin() - th.sin()),
                 theta: th.rem_euclid(TAU),
             }
         }

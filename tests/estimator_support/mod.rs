@@ -113,7 +113,7 @@ pub fn truth_step(p: TruePose, motion_kind: i8, v: f64, w: f64, drift: f64, dt: 
         _ => {
             let th1 = p.th + w * dt;
             let d = d_mm();
-            TruePose { x: p.x - d * (p.th.cos() - th1.cos()), y: p.y + d * (p.th.sin() - th1.sin()), th: th1 }
+            TruePose { x: p.x - d * (p.th.cos() - th1.cos()), y: p.y - d * (p.th.sin() - th1.sin()), th: th1 }
         }
     }
 }

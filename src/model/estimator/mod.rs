@@ -324,18 +324,18 @@ impl Estimator {
             Motion::Turn(_) => {
                 let (s0, c0) = sin_cos(before.theta);
                 let (s1, c1) = sin_cos(self.pose.theta);
-                // The report's turn: x' = x - D (c0 - c1), y' = y + D (s0 - s1):
-                // dx'/dtheta = D (s0 - s1), dy'/dtheta = D (c0 - c1). Halves
+                // The turn (model::state): x' = x - D (c0 - c1), y' = y - D (s0 - s1):
+                // dx'/dtheta = D (s0 - s1), dy'/dtheta = D (c1 - c0). Halves
                 // of Q30 values keep the differences in i32 (Q29); D/L Q31
                 // times Q29 gives Q28 from mul_hi, hence the * 4.
                 let f1 = mul_hi(D_OVER_L_Q31, (s0 >> 1) - (s1 >> 1)).saturating_mul(4);
-                let f2 = mul_hi(D_OVER_L_Q31, (c0 >> 1) - (c1 >> 1)).saturating_mul(4);
+                let f2 = mul_hi(D_OVER_L_Q31, (c1 >> 1) - (c0 >> 1)).saturating_mul(4);
                 propagate(p, f1, f2);
-                // Q: the turned angle's noise enters through G = (-D s1 / L, -D c1 / L, 1).
+                // Q: the turned angle's noise enters through G = (-D s1 / L, D c1 / L, 1).
                 let turned = self.pose.theta.diff(before.theta).saturating_abs();
                 let vt = mul_hi(turned, K_TURN);
                 let g1 = -mul_hi(D_OVER_L_Q31, s1).saturating_mul(2);
-                let g2 = -mul_hi(D_OVER_L_Q31, c1).saturating_mul(2);
+                let g2 = mul_hi(D_OVER_L_Q31, c1).saturating_mul(2);
                 let (v1, v2) = (mul_q30(vt, g1), mul_q30(vt, g2));
                 p.xx = p.xx.saturating_add(mul_q30(v1, g1));
                 p.xy = p.xy.saturating_add(mul_q30(v1, g2));
