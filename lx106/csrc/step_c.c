@@ -4,7 +4,9 @@
  * port of the same equations as paperbot::model::step and src/float.rs:
  *   stop:     nothing moves
  *   straight: x += v t cos th, y += v t sin th
- *   turn:     th' = th + w t, x' = x - D (cos th - cos th'), y' = y + D (sin th - sin th')
+ *   turn:     th' = th + w t, x' = x - D (cos th - cos th'), y' = y - D (sin th - sin th')
+ *   (the report prints y + D (...); the core uses the rigid-body sign, see
+ *   src/model/state.rs)
  * Units: mm, rad, mm/s, rad/s, s. Like the equations (and the fixed-point
  * Angle, which wraps for free), th is not wrapped; a real float firmware
  * would add a wrap to keep precision, which costs more soft-float calls. */
@@ -30,7 +32,7 @@ void c_step(struct pose_f *p, int kind, float rate, float dt, float d)
         float s0 = sinf(p->th), c0 = cosf(p->th);
         float s1 = sinf(th1), c1 = cosf(th1);
         p->x = p->x - d * (c0 - c1);
-        p->y = p->y + d * (s0 - s1);
+        p->y = p->y - d * (s0 - s1);
         p->th = th1;
         break;
     }

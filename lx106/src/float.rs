@@ -2,7 +2,8 @@
 //! pure-Rust `libm`): a line-by-line port of `csrc/step_c.c`, for the
 //! benchmark only. Same equations as `paperbot::model::step` (report 3.1):
 //! straight `x += v t cos th, y += v t sin th`; turn `th' = th + w t,
-//! x' = x - D (cos th - cos th'), y' = y + D (sin th - sin th')`.
+//! x' = x - D (cos th - cos th'), y' = y - D (sin th - sin th')` (the
+//! core's rigid-body sign of the y term; the report prints `+`).
 //! Units: mm, rad, mm/s, rad/s, s. Like the C version th is not wrapped.
 
 /// Same layout as the C `struct pose_f`.
@@ -33,7 +34,7 @@ pub fn step(p: &mut PoseF, kind: i32, rate: f32, dt: f32, d: f32) {
             let (s0, c0) = (libm::sinf(p.th), libm::cosf(p.th));
             let (s1, c1) = (libm::sinf(th1), libm::cosf(th1));
             p.x -= d * (c0 - c1);
-            p.y += d * (s0 - s1);
+            p.y -= d * (s0 - s1);
             p.th = th1;
         }
         _ => {}

@@ -10,7 +10,10 @@
 
 mod bench;
 mod float;
+#[rustfmt::skip]
+mod host_bits;
 mod rt;
+mod scripts;
 mod suite;
 #[rustfmt::skip]
 mod vectors;

@@ -7,7 +7,9 @@ use crate::println;
 
 mod actuator;
 mod compass;
+mod control;
 mod counter;
+mod estimator;
 mod lidar;
 mod math;
 pub mod ports;
@@ -28,6 +30,8 @@ pub const GROUPS: &[(&str, &[Test])] = &[
     ("state", state::TESTS),
     ("ports", ports::TESTS),
     ("protocol", protocol::TESTS),
+    ("estimator", estimator::TESTS),
+    ("control", control::TESTS),
 ];
 
 pub fn check(cond: bool, msg: &'static str) -> TestResult {
