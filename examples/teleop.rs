@@ -9,7 +9,7 @@
 //!   --baud N         baud rate (default 115200, config::serial::BAUD)
 //!   --record FILE    record the drive as a replay log (cargo run --example replay -- FILE)
 //!   --raw FILE       also keep every line the robot sends (telemetry CSV and # lines)
-//!   --rate HZ        telemetry rate to ask for (default 50 when recording, else the robot's)
+//!   --rate HZ        telemetry rate to ask for (default 50 when recording, else 10; 0 = off)
 //!   --lines FILE     line mode: send FILE's commands ('-' = stdin), print what comes back
 //!   --linger S       line mode: listen S seconds after the last command (default 1)
 //!   --no-keepalive   line mode: do not repeat untimed motions (the deadman cuts them)
@@ -303,14 +303,19 @@ fn run() -> Result<(), String> {
         Some(path) => Some(Recorder::new(create(path)?).map_err(|e| format!("{path}: {e}"))?),
     };
     let mut raw = args.raw.as_deref().map(create).transpose()?;
-    let rate = args.rate.or(recorder.as_ref().map(|_| config::teleop::RECORD_TELEMETRY_HZ));
+    // telemetry is restarted (so its header comes again) at the chosen rate
+    let rate = args.rate.unwrap_or(if recorder.is_some() {
+        config::teleop::RECORD_TELEMETRY_HZ
+    } else {
+        config::timing::TELEMETRY_HZ as u16
+    });
 
     match plan {
         Some(plan) => {
             let opts = LineModeOptions {
                 linger_ms: (args.linger_s * 1000.0) as u64,
                 keepalive: args.keepalive,
-                rate_hz: rate,
+                rate_hz: Some(rate),
                 ..LineModeOptions::default()
             };
             let mut out = Tee(io::stdout().lock(), raw.take());
@@ -326,9 +331,7 @@ fn run() -> Result<(), String> {
             if !io::stdout().is_terminal() || !io::stdin().is_terminal() {
                 return Err("not a terminal: use --lines FILE (or '-' for stdin) for the line mode".into());
             }
-            if let Some(hz) = rate {
-                link::send(&mut *port, &format!("rate {hz}")).map_err(|e| format!("{port_name}: {e}"))?;
-            }
+            link::start_telemetry(&mut *port, rate).map_err(|e| format!("{port_name}: {e}"))?;
             run_tui(&mut *port, &mut recorder, &mut raw, args.record.as_deref())
                 .map_err(|e| format!("{port_name}: {e}"))?;
         }

@@ -68,6 +68,18 @@ pub fn send<W: Write + ?Sized>(port: &mut W, command: &str) -> io::Result<()> {
     port.flush()
 }
 
+/// Asks for telemetry at `hz` rows a second: `rate 0` first, so the robot
+/// prints its CSV header again before the first row (it prints one only
+/// when telemetry is switched on), which makes the output a complete CSV.
+/// `hz` = 0 just switches telemetry off.
+pub fn start_telemetry<W: Write + ?Sized>(port: &mut W, hz: u16) -> io::Result<()> {
+    send(port, "rate 0")?;
+    if hz > 0 {
+        send(port, &std::format!("rate {hz}"))?;
+    }
+    Ok(())
+}
+
 /// How the line mode runs.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
 pub struct LineModeOptions {
@@ -77,7 +89,7 @@ pub struct LineModeOptions {
     /// next motion command (or the end), so it is not cut by the deadman.
     pub keepalive: bool,
     pub refresh_ms: u64,
-    /// Telemetry rate to ask for first (`rate N`), if any.
+    /// Telemetry rate to ask for first ([`start_telemetry`]), if any.
     pub rate_hz: Option<u16>,
 }
 
@@ -202,7 +214,7 @@ where
     Ok(())
 }
 
-/// Runs the line mode: asks for `rate_hz` if set, sends each plan line at
+/// Runs the line mode: asks for telemetry at `rate_hz` if set, sends each plan line at
 /// its time (and keeps untimed motions alive), prints every line the robot
 /// sends to `out` as it comes, records telemetry rows into `recorder`,
 /// listens `linger_ms` after the last line, then sends `stop`.
@@ -225,7 +237,7 @@ where
     let mut dash = Dashboard::new();
     let mut schedule = LineSchedule::new(plan, opts.keepalive, opts.refresh_ms);
     if let Some(hz) = opts.rate_hz {
-        send(port, &std::format!("rate {hz}"))?;
+        start_telemetry(port, hz)?;
     }
     let mut stop_at: Option<u64> = None;
     loop {
