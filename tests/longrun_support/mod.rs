@@ -111,17 +111,13 @@ impl Seen {
 }
 
 /// Checks the firmware after every tick (see the module docs).
+#[derive(Default)]
 pub struct Watcher {
     pub seen: Seen,
     /// Loop clock (us) of the last accepted command.
     last_ok_us: u64,
 }
 
-impl Default for Watcher {
-    fn default() -> Self {
-        Watcher { seen: Seen::default(), last_ok_us: 0 }
-    }
-}
 
 fn counters(f: &FaultCounters) -> [u32; 6] {
     [f.bus, f.timeout, f.missing, f.bad_sample, f.rejected_outliers, f.overruns]
