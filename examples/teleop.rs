@@ -28,7 +28,7 @@ use paperbot::host::teleop::{
 };
 use ratatui::crossterm::event::{self, Event, KeyCode, KeyEventKind, KeyModifiers};
 use ratatui::layout::{Constraint, Layout};
-use ratatui::widgets::{Block, Paragraph};
+use ratatui::widgets::{Block, Paragraph, Wrap};
 use serialport::{SerialPort, SerialPortType};
 
 /// Read timeout of the port: the UI loop's pace when no key comes, ms.
@@ -171,7 +171,7 @@ fn key_of(code: KeyCode, mods: KeyModifiers) -> Option<Key> {
 
 fn draw(frame: &mut ratatui::Frame, panels: &[Panel], help: bool) {
     fn para(p: &Panel) -> Paragraph<'_> {
-        Paragraph::new(p.lines.join("\n")).block(Block::bordered().title(p.title.as_str()))
+        Paragraph::new(p.lines.join("\n")).wrap(Wrap { trim: false }).block(Block::bordered().title(p.title.as_str()))
     }
     let height = |ps: &[&Panel]| ps.iter().map(|p| p.lines.len()).max().unwrap_or(1) as u16 + 2;
     let find = |t: &str| panels.iter().find(|p| p.title == t);
@@ -244,16 +244,7 @@ fn run_tui(
             if let Some(cmd) = driver.poll(now) {
                 link::send(port, &cmd)?;
             }
-            for line in reader.poll(port)? {
-                if let Some(r) = raw.as_mut() {
-                    writeln!(r, "{line}")?;
-                }
-                if let Some(row) = dash.on_line(&line, now) {
-                    if let Some(rec) = recorder.as_mut() {
-                        rec.record(&row)?;
-                    }
-                }
-            }
+            take_lines(port, &mut reader, &mut dash, raw, recorder, now)?;
             if now >= next_frame {
                 next_frame = now + u64::from(config::teleop::FRAME_MS);
                 let rec = recorder
@@ -264,10 +255,39 @@ fn run_tui(
             }
         }
     })();
-    // stop the robot whatever happened, then give the terminal back
+    // stop the robot whatever happened; its answer and the last rows go
+    // into the logs too; then give the terminal back
     let stopped = link::send(port, "stop");
+    let end = now_ms() + u64::from(config::teleop::REFRESH_MS);
+    while stopped.is_ok() && now_ms() < end {
+        if take_lines(port, &mut reader, &mut dash, raw, recorder, now_ms()).is_err() {
+            break;
+        }
+    }
     ratatui::restore();
     result.and(stopped)
+}
+
+/// One read from the port: lines to the raw log, the screen and the recorder.
+fn take_lines(
+    port: &mut dyn SerialPort,
+    reader: &mut LineReader,
+    dash: &mut Dashboard,
+    raw: &mut Option<BufWriter<File>>,
+    recorder: &mut Option<Recorder<BufWriter<File>>>,
+    now: u64,
+) -> io::Result<()> {
+    for line in reader.poll(port)? {
+        if let Some(r) = raw.as_mut() {
+            writeln!(r, "{line}")?;
+        }
+        if let Some(row) = dash.on_line(&line, now) {
+            if let Some(rec) = recorder.as_mut() {
+                rec.record(&row)?;
+            }
+        }
+    }
+    Ok(())
 }
 
 fn run() -> Result<(), String> {

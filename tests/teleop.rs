@@ -277,23 +277,33 @@ fn dashboard_shows_the_newest_row_and_counts_the_link() {
         assert!(pose.contains(want), "{want:?} in\n{pose}");
     }
     let sensors = panel(&p, "sensors");
-    for want in
-        ["front raw 412 mm  dist 349.5 mm", "right raw 8190 mm  dist - mm", "compass 353.117 deg", "mag raw -12 40 -3"]
-    {
+    for want in [
+        "front raw 412 mm  dist 349.5 mm  (0 ms ago)",
+        "right raw 8190 mm  dist - mm",
+        "compass 353.117 deg",
+        "mag raw -12 40 -3",
+    ] {
         assert!(sensors.contains(want), "{want:?} in\n{sensors}");
     }
     let link = panel(&p, "link");
     for want in ["telemetry ok", "rows 1  ok 2  err 1  bad 1", "record drive.csv: 1 rows"] {
         assert!(link.contains(want), "{want:?} in\n{link}");
     }
-    assert!(panel(&p, "drive").contains("holding `stop`"));
+    assert!(panel(&p, "drive").contains("stopped"));
+    let mut moving = Driver::from_config();
+    moving.set(MotionKind::Ccw);
+    let text = panel(&d.panels(20, &moving, None), "drive");
+    assert!(text.contains(&format!("holding `{}`, sent again every 125 ms", moving.command())), "{text}");
     assert_eq!(panel(&p, "messages").lines().count(), 3);
 
     d.on_line(EMPTY_ROW, 30);
     let p = d.panels(40, &driver, None);
     assert!(panel(&p, "faults").contains("bus 2  timeout 1  missing 0"), "{}", panel(&p, "faults"));
     assert!(panel(&p, "faults").contains("outliers 3  overruns 1"));
-    assert!(panel(&p, "sensors").contains("compass - deg"));
+    // an empty row keeps the newest readings on screen, with their age
+    let sensors = panel(&p, "sensors");
+    assert!(sensors.contains("front raw 412 mm  dist 349.5 mm  (20 ms ago)"), "{sensors}");
+    assert!(sensors.contains("compass 353.117 deg  (20 ms ago)"), "{sensors}");
     let stale_at = 30 + config::teleop::STALE_LINK_MS as u64 + 1;
     assert!(!d.stale(stale_at - 1) && d.stale(stale_at));
     assert!(panel(&d.panels(stale_at, &driver, None), "link").contains("STALE"));

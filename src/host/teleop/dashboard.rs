@@ -16,6 +16,7 @@ use std::vec::Vec;
 use super::drive::Driver;
 use crate::config;
 use crate::control::protocol::{classify_line, parse_telemetry_row, telemetry, LineKind, TelemetryRow, ERR, OK};
+use crate::model::MotionKind;
 
 /// A titled box of text lines.
 #[derive(Clone, PartialEq, Eq, Debug)]
@@ -38,6 +39,12 @@ pub struct Dashboard {
     last_ok: Option<String>,
     messages: VecDeque<String>,
     max_messages: usize,
+    /// The newest reading of each sensor and its row time (rows leave a
+    /// field empty when the sensor had nothing new): front and right lidar
+    /// (raw mm, distance 0.1 mm), compass (millidegrees, raw counts).
+    front: Option<(u32, u16, Option<i32>)>,
+    right: Option<(u32, u16, Option<i32>)>,
+    compass: Option<(u32, u32, Option<[i16; 3]>)>,
 }
 
 fn dmm(v: i32) -> String {
@@ -85,6 +92,15 @@ impl Dashboard {
             LineKind::Row => match parse_telemetry_row(line) {
                 Ok(row) => {
                     self.rows = self.rows.saturating_add(1);
+                    if let Some(raw) = row.front_raw_mm {
+                        self.front = Some((row.t_ms, raw, row.front_dmm));
+                    }
+                    if let Some(raw) = row.right_raw_mm {
+                        self.right = Some((row.t_ms, raw, row.right_dmm));
+                    }
+                    if let Some(h) = row.compass_mdeg {
+                        self.compass = Some((row.t_ms, h, row.mag_raw));
+                    }
                     self.last = Some(row);
                     self.last_row_ms = Some(now_ms);
                     Some(row)
@@ -169,26 +185,25 @@ impl Dashboard {
                 .into(),
             },
         });
+        // the newest reading of each sensor, with its age against the newest row
+        let now_t = r.map_or(0, |r| r.t_ms);
+        let age = |t: u32| format!("({} ms ago)", now_t.saturating_sub(t));
+        let lidar = |name: &str, l: Option<(u32, u16, Option<i32>)>| match l {
+            None => format!("{name} -"),
+            Some((t, raw, d)) => format!("{name} raw {raw} mm  dist {} mm  {}", opt(d, dmm), age(t)),
+        };
         out.push(Panel {
             title: String::from("sensors"),
-            lines: match r {
-                None => ["-".to_string()].into(),
-                Some(r) => [
-                    format!(
-                        "front raw {} mm  dist {} mm",
-                        opt(r.front_raw_mm, |v| v.to_string()),
-                        opt(r.front_dmm, dmm)
-                    ),
-                    format!(
-                        "right raw {} mm  dist {} mm",
-                        opt(r.right_raw_mm, |v| v.to_string()),
-                        opt(r.right_dmm, dmm)
-                    ),
-                    format!("compass {} deg", opt(r.compass_mdeg, |v| milli(v as i32))),
-                    format!("mag raw {}", opt(r.mag_raw, |m| format!("{} {} {}", m[0], m[1], m[2]))),
-                ]
-                .into(),
-            },
+            lines: [
+                lidar("front", self.front),
+                lidar("right", self.right),
+                match self.compass {
+                    None => String::from("compass -"),
+                    Some((t, h, _)) => format!("compass {} deg  {}", milli(h as i32), age(t)),
+                },
+                format!("mag raw {}", opt(self.compass.and_then(|c| c.2), |m| format!("{} {} {}", m[0], m[1], m[2]))),
+            ]
+            .into(),
         });
         out.push(Panel {
             title: String::from("faults"),
@@ -210,7 +225,10 @@ impl Dashboard {
         out.push(Panel {
             title: String::from("drive"),
             lines: [
-                format!("holding `{}`, sent again every {} ms", driver.command(), driver.refresh_ms()),
+                match driver.wanted() {
+                    MotionKind::Stop => String::from("stopped (arrows / WASD drive)"),
+                    _ => format!("holding `{}`, sent again every {} ms", driver.command(), driver.refresh_ms()),
+                },
                 format!("speed {}", driver.speeds().describe()),
             ]
             .into(),
