@@ -118,7 +118,6 @@ pub struct Watcher {
     last_ok_us: u64,
 }
 
-
 fn counters(f: &FaultCounters) -> [u32; 6] {
     [f.bus, f.timeout, f.missing, f.bad_sample, f.rejected_outliers, f.overruns]
 }
@@ -148,6 +147,12 @@ impl Watcher {
                 }
                 self.seen.last_faults = row.faults;
             }
+        }
+        // stopped means the servos are at their neutral commands
+        let stop = robot.controller().model().stop();
+        if robot.controller().mode() == Mode::Idle {
+            let servos = *robot.controller_mut().servos();
+            assert_eq!((servos.left, servos.right), (stop.left, stop.right), "idle but driving");
         }
         let ctl = robot.controller();
         // the deadman: an untimed motion never outlives DEADMAN_MS without a command

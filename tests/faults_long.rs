@@ -1,0 +1,302 @@
+//! Long fault-injection runs on the simulated bus: the control loop of the
+//! simulated robot for an hour of robot time, with a few percent of the
+//! bus transactions failing at random (NACK, clock-stretch timeout, SDA
+//! stuck for one transaction, corrupted bytes), and every half minute or so
+//! an outage: a chip unplugged for seconds and plugged back in (a power
+//! cycle), SDA held low for a while, or an address that stops answering.
+//! A random operator keeps typing, sometimes going silent mid-drive.
+//!
+//! Checked (overflow checks are on): no panic; every tick, the deadman
+//! stops an untimed motion and the output stays well formed with
+//! monotonic fault counters (`longrun_support::Watcher`); the faults show
+//! in the telemetry's counters; after each outage every sensor is back up
+//! and delivering; the estimate stays bounded with a valid covariance.
+
+mod longrun_support;
+
+use longrun_support::{random_command, range, Watcher};
+use paperbot::config;
+use paperbot::control::TICK_US;
+use paperbot::sim::bus::Fault;
+use paperbot::sim::noise::Rng;
+use paperbot::sim::robot::{SimConfig, SimRobot};
+
+/// One outage of the sensor bus.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Outage {
+    /// A chip unplugged (0 front, 1 right, 2 MPU9250) and plugged back in.
+    Unplugged(u8),
+    /// SDA held low by a stuck slave.
+    SdaStuck,
+    /// An address nobody answers (front, right or the compass).
+    Nack(u8),
+}
+
+impl Outage {
+    fn set(self, robot: &SimRobot, on: bool) {
+        let s = &robot.sensors;
+        match self {
+            Outage::Unplugged(0) => s.front.borrow_mut().set_present(!on),
+            Outage::Unplugged(1) => s.right.borrow_mut().set_present(!on),
+            Outage::Unplugged(_) => s.mpu.borrow_mut().set_present(!on),
+            Outage::SdaStuck => s.bus.set_sda_stuck(on),
+            Outage::Nack(a) => s.bus.set_nack_address(a, on),
+        }
+    }
+}
+
+/// Counts of what was injected.
+#[derive(Default, Debug)]
+struct Injected {
+    /// One-shot faults that reached a transaction, by kind.
+    failing: u64,
+    corrupt: u64,
+    outages: u64,
+    transactions: u64,
+}
+
+fn random_fault(rng: &mut Rng) -> Fault {
+    match rng.next_u64() % 4 {
+        0 => Fault::Nack,
+        1 => Fault::Timeout,
+        2 => Fault::SdaStuck,
+        _ => Fault::Corrupt(1 << (rng.next_u64() % 8) | (rng.next_u64() as u8 & 0x81)),
+    }
+}
+
+struct Run {
+    ticks: u64,
+    /// Probability that a transaction gets a one-shot fault.
+    fault_rate: f64,
+    seed: u64,
+    /// Every outage must be recovered from within this long (s), and the
+    /// next one waits for the recovery; `None`: outages come regardless.
+    recovery_limit_s: Option<f64>,
+}
+
+struct Report {
+    recovery_limit_s: Option<f64>,
+    watcher: Watcher,
+    injected: Injected,
+    /// Longest time from the end of an outage to all three sensors up and
+    /// delivering again, s.
+    worst_recovery_s: f64,
+    recoveries: u64,
+    /// Fraction of the ticks each sensor was up (front, right, compass).
+    up: [f64; 3],
+    robot: SimRobot,
+    secs: f64,
+}
+
+/// Readings each sensor has delivered to the estimator so far (front,
+/// right, compass; in the box a lidar always sees a wall).
+fn delivered(robot: &SimRobot) -> [u32; 3] {
+    let st = robot.controller().estimator().stats();
+    [st.front.total(), st.right.total(), st.compass.total()]
+}
+
+/// All three sensors up.
+fn all_up(robot: &SimRobot) -> bool {
+    let c = robot.controller();
+    c.front_health().up && c.right_health().up && c.compass_health().up
+}
+
+fn run(r: Run) -> Report {
+    let start = std::time::Instant::now();
+    let mut robot = SimRobot::new(SimConfig { seed: r.seed, ..SimConfig::default() });
+    let mut rng = Rng::new(r.seed ^ 0xFA17);
+    let mut w = Watcher::default();
+    let mut inj = Injected::default();
+    let mut next_command = 0u64;
+    let mut outage: Option<(Outage, u64)> = None; // and the tick it ends
+    let mut next_outage = range(&mut rng, 1_000, 5_000) as u64;
+    // (end of the last outage in ticks, sample counts of the three sensors then)
+    let mut recovering: Option<(u64, [u32; 3])> = None;
+    let (mut worst_recovery, mut recoveries) = (0u64, 0u64);
+    let mut up_ticks = [0u64; 3];
+    let per_s = i64::from(1_000_000 / TICK_US);
+    for i in 0..r.ticks {
+        if i == next_command {
+            let line = random_command(&mut rng, &robot);
+            robot.send(&line);
+            next_command +=
+                if rng.next_u64() % 10 == 0 { range(&mut rng, 60, 300) } else { range(&mut rng, 1, 45) } as u64;
+        }
+        // outages: one at a time, 0.2..5 s long, every 10..50 s
+        if outage.is_none() && i >= next_outage {
+            let o = match rng.next_u64() % 5 {
+                0 => Outage::Unplugged((rng.next_u64() % 3) as u8),
+                1 => Outage::SdaStuck,
+                2 => Outage::Nack(config::i2c::FRONT_LIDAR_ADDR),
+                3 => Outage::Nack(config::i2c::RIGHT_LIDAR_ADDR),
+                _ => Outage::Nack(config::i2c::AK8963_ADDR),
+            };
+            o.set(&robot, true);
+            inj.outages += 1;
+            outage = Some((o, i + range(&mut rng, per_s / 5, 5 * per_s) as u64));
+            recovering = None;
+        }
+        if let Some((o, end)) = outage {
+            if i >= end {
+                o.set(&robot, false);
+                outage = None;
+                next_outage = i + range(&mut rng, 10 * per_s, 50 * per_s) as u64;
+                recovering = Some((i, delivered(&robot)));
+                if r.recovery_limit_s.is_some() {
+                    next_outage = u64::MAX; // scheduled once recovered
+                }
+            }
+        }
+        // one-shot faults: each transaction of this tick faulty with the
+        // given probability (the bus matches them by transaction number)
+        let t0 = robot.sensors.bus.transactions();
+        robot.sensors.bus.clear_faults();
+        let mut planned = Vec::new();
+        for k in 0..512 {
+            if rng.uniform() < r.fault_rate {
+                let f = random_fault(&mut rng);
+                robot.sensors.bus.inject(t0 + k, f);
+                planned.push((t0 + k, f));
+            }
+        }
+        robot.tick();
+        let t1 = robot.sensors.bus.transactions();
+        inj.transactions += u64::from(t1 - t0);
+        for (at, f) in planned {
+            if at < t1 {
+                match f {
+                    Fault::Corrupt(_) => inj.corrupt += 1,
+                    _ => inj.failing += 1,
+                }
+            }
+        }
+        w.after_tick(&mut robot);
+        let c = robot.controller();
+        for (u, h) in up_ticks.iter_mut().zip([c.front_health(), c.right_health(), c.compass_health()]) {
+            *u += u64::from(h.up);
+        }
+        // recovery: every sensor up again and each chip has measured since
+        if let Some((since, before)) = recovering {
+            let now = delivered(&robot);
+            if all_up(&robot) && now.iter().zip(before).all(|(n, b)| *n > b) {
+                worst_recovery = worst_recovery.max(i - since);
+                recoveries += 1;
+                recovering = None;
+                if next_outage == u64::MAX {
+                    next_outage = i + range(&mut rng, 10 * per_s, 50 * per_s) as u64;
+                }
+            } else if let Some(limit) = r.recovery_limit_s {
+                assert!(
+                    ((i - since) as f64) < limit * per_s as f64,
+                    "sensors not back 60 s after an outage: {:?} {:?} {:?}",
+                    robot.controller().front_health(),
+                    robot.controller().right_health(),
+                    robot.controller().compass_health()
+                );
+            }
+        }
+    }
+    let secs = start.elapsed().as_secs_f64();
+    Report {
+        recovery_limit_s: r.recovery_limit_s,
+        watcher: w,
+        injected: inj,
+        worst_recovery_s: worst_recovery as f64 / per_s as f64,
+        recoveries,
+        up: up_ticks.map(|u| u as f64 / r.ticks.max(1) as f64),
+        robot,
+        secs,
+    }
+}
+
+fn print(name: &str, r: &Report) {
+    let c = r.robot.controller();
+    let s = &r.watcher.seen;
+    println!(
+        "{name}: {} ticks ({:.2} h simulated) in {:.1} s; {:?} ({:.2} % of transactions faulty); {} recoveries, worst {:.1} s; \
+         up {:.0} / {:.0} / {:.0} % of the time; \
+         telemetry counters {:?}; health {:?} {:?} {:?}; {} deadman stops; estimate worst {:.0} mm outside",
+        s.ticks,
+        c.clock_us() as f64 / 3.6e9,
+        r.secs,
+        r.injected,
+        100.0 * (r.injected.failing + r.injected.corrupt) as f64 / r.injected.transactions.max(1) as f64,
+        r.recoveries,
+        r.worst_recovery_s,
+        100.0 * r.up[0],
+        100.0 * r.up[1],
+        100.0 * r.up[2],
+        s.last_faults,
+        c.front_health(),
+        c.right_health(),
+        c.compass_health(),
+        s.deadman_stops,
+        s.worst_outside_mm,
+    );
+}
+
+fn check(r: &Report) {
+    let s = &r.watcher.seen;
+    let f = r.robot.controller().faults();
+    // the faults are counted, and the telemetry says so
+    let counted = u64::from(f.bus) + u64::from(f.timeout) + u64::from(f.missing) + u64::from(f.bad_sample);
+    assert!(counted > 0 && s.last_faults.bus > 0, "{f:?}");
+    // every failing one-shot that hit a poll is one counted fault at most
+    // (a failed re-init counts once whatever failed in it); outages add more
+    assert!(counted >= r.injected.failing / 2, "counted {counted} of {} failing transactions", r.injected.failing);
+    // the last row is at most a telemetry period old
+    let t = s.last_faults;
+    assert!(t.bus <= f.bus && t.timeout <= f.timeout && t.missing <= f.missing, "{t:?} {f:?}");
+    // with a recovery limit, every outage was recovered from (the last one
+    // may still be running or recovering)
+    if r.recovery_limit_s.is_some() {
+        assert!(
+            r.recoveries + 1 >= r.injected.outages && r.recoveries > 50,
+            "{} of {}",
+            r.recoveries,
+            r.injected.outages
+        );
+    }
+    assert!(s.deadman_stops > 0);
+    // The estimate stays bounded, its covariance valid every tick (the
+    // watcher). A regression bound, not accuracy: with sensors down the
+    // loop dead-reckons while the body may sit at a wall, and nothing
+    // holds the estimate inside the arena (tests/soak.rs). Measured: 1538 mm.
+    assert!(s.worst_outside_mm < 2_500.0, "{}", s.worst_outside_mm);
+}
+
+/// An hour of robot time with outages every 10..50 s on a bus where 1 %
+/// of the transactions fail or corrupt at random: every outage is
+/// recovered from (all three sensors up and delivering) within 30 s.
+#[test]
+fn an_hour_of_outages_on_a_one_percent_bus() {
+    let r = run(Run { ticks: 360_000, fault_rate: 0.01, seed: 21, recovery_limit_s: Some(30.0) });
+    print("outages, 1 % faulty", &r);
+    check(&r);
+}
+
+/// An hour with 3 % of the transactions faulty and outages regardless of
+/// recovery. A lidar bring-up is about a hundred transactions and gives up
+/// at the first failure, so at this rate the lidars are down most of the
+/// time (measured, see the report): the loop still never panics, stops on the
+/// deadman, counts every fault and keeps the estimate bounded.
+#[test]
+fn an_hour_with_three_percent_faulty_transactions() {
+    let r = run(Run { ticks: 360_000, fault_rate: 0.03, seed: 22, recovery_limit_s: None });
+    print("3 % faulty", &r);
+    check(&r);
+    // every sensor comes back now and then, even on this bus (measured: up
+    // 1 / 2 / 32 % of the time: a single NACKed poll takes a sensor down
+    // for a second and a full re-init, see the report)
+    let c = r.robot.controller();
+    assert!(c.front_health().reinits > 10 && c.right_health().reinits > 10 && c.compass_health().reinits > 100);
+}
+
+/// Ten minutes with 10 % of the transactions faulty: the lidars hardly
+/// come up at all, and nothing else changes.
+#[test]
+fn ten_minutes_with_ten_percent_faulty_transactions() {
+    let r = run(Run { ticks: 60_000, fault_rate: 0.10, seed: 23, recovery_limit_s: None });
+    print("10 % faulty", &r);
+    check(&r);
+}
