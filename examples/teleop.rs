@@ -17,7 +17,7 @@
 //! Keys: arrows / WASD drive, space stops, + / - speed level, q quits.
 
 use std::fs::File;
-use std::io::{self, BufWriter, Read, Write};
+use std::io::{self, BufWriter, IsTerminal, Read, Write};
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
@@ -311,6 +311,9 @@ fn run() -> Result<(), String> {
             Some(parse_plan(&text).map_err(|e| format!("{path}: {e}"))?)
         }
     };
+    if plan.is_none() && !(io::stdout().is_terminal() && io::stdin().is_terminal()) {
+        return Err("not a terminal: use --lines FILE (or '-' for stdin) for the line mode".into());
+    }
     let port_name = pick_port(&args)?;
     let mut port = serialport::new(&port_name, args.baud)
         .timeout(Duration::from_millis(POLL_MS))
@@ -347,10 +350,6 @@ fn run() -> Result<(), String> {
             );
         }
         None => {
-            use std::io::IsTerminal;
-            if !io::stdout().is_terminal() || !io::stdin().is_terminal() {
-                return Err("not a terminal: use --lines FILE (or '-' for stdin) for the line mode".into());
-            }
             link::start_telemetry(&mut *port, rate).map_err(|e| format!("{port_name}: {e}"))?;
             run_tui(&mut *port, &mut recorder, &mut raw, args.record.as_deref())
                 .map_err(|e| format!("{port_name}: {e}"))?;
@@ -366,14 +365,18 @@ fn run() -> Result<(), String> {
 }
 
 fn main() -> ExitCode {
+    if let Err(e) = parse_args() {
+        if !e.is_empty() {
+            eprintln!("teleop: {e}");
+        }
+        eprintln!("{}", usage());
+        return ExitCode::from(2);
+    }
     match run() {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            if !e.is_empty() {
-                eprintln!("teleop: {e}");
-            }
-            eprintln!("{}", usage());
-            ExitCode::from(2)
+            eprintln!("teleop: {e}");
+            ExitCode::FAILURE
         }
     }
 }
