@@ -9,17 +9,51 @@
 //!
 //! Frame: x to north, y to east, heading clockwise from north, lengths in mm.
 #![no_std]
+// Nothing on the robot's path may panic (issue 8): the lints that catch a
+// panic path are errors outside test code (`cargo clippy --all-targets -- -D
+// warnings` in CI). Host-only modules (`sim`, `host`, `std` helpers) allow
+// them at module level; the fixed-point kernels (`math`, `model`) allow
+// `arithmetic_side_effects` at module level because every operation there
+// carries a bound proof in a comment and runs under overflow checks in the
+// property, soak and lx106 bit-exact tests; everywhere else arithmetic is
+// checked, saturating or wrapping, or locally allowed with its bound.
+#![cfg_attr(
+    not(test),
+    deny(
+        clippy::unwrap_used,
+        clippy::expect_used,
+        clippy::panic,
+        clippy::indexing_slicing,
+        clippy::unreachable,
+        clippy::todo,
+        clippy::unimplemented,
+        clippy::arithmetic_side_effects
+    )
+)]
 
 #[cfg(feature = "std")]
 extern crate std;
 
+// TODO(board helper): arithmetic and indexing in board/ (uart divisor
+// maths, servo edge planning, the host bit-bang wire model) are to be made
+// checked or given local allows with their bounds; until then the board
+// layer allows these two lints.
+#[allow(clippy::arithmetic_side_effects, clippy::indexing_slicing)]
+pub mod board;
 pub mod config;
 pub mod control;
 pub mod driver;
+// Host-only tools (std): a panic there fails a host command, not the robot.
 #[cfg(feature = "std")]
+#[allow(clippy::arithmetic_side_effects, clippy::indexing_slicing, clippy::unwrap_used, clippy::expect_used)]
 pub mod host;
+// Fixed-point kernels: every operation's bound is proven in a comment and
+// runs under overflow checks in the proptest, soak and lx106 tests.
+#[allow(clippy::arithmetic_side_effects)]
 pub mod math;
+#[allow(clippy::arithmetic_side_effects)]
 pub mod model;
+// The simulator (host only, std, f64): test scaffolding, not robot code.
 #[cfg(feature = "sim")]
+#[allow(clippy::arithmetic_side_effects, clippy::indexing_slicing, clippy::unwrap_used, clippy::expect_used)]
 pub mod sim;
-pub mod board;

@@ -68,7 +68,7 @@ const _: () = assert!(config::timing::LOOP_HZ >= 1 && config::timing::LOOP_HZ <=
 
 /// ms to us, in 64 bits (no overflow for any u32).
 const fn ms_to_us(ms: u32) -> u64 {
-    ms as u64 * 1_000
+    (ms as u64).saturating_mul(1_000)
 }
 
 /// One sensor's health.
@@ -386,7 +386,8 @@ where
     fn set_rate(&mut self, hz: u16) {
         let was_off = self.telemetry_hz == 0;
         self.telemetry_hz = hz;
-        self.telemetry_period_us = if hz == 0 { 0 } else { 1_000_000 / u64::from(hz) };
+        // hz = 0 (off) gives period 0
+        self.telemetry_period_us = 1_000_000u64.checked_div(u64::from(hz)).unwrap_or(0);
         // the first row at the next tick (after the header if telemetry was off)
         self.next_telemetry_us = self.clock_us;
         if hz != 0 && was_off {
@@ -448,8 +449,8 @@ where
             let dt = Dt::from_micros_saturating(left);
             self.estimator.predict(motion, dt);
             self.dead = step(&self.dead, motion, dt);
-            left -= dt.as_micros(); // dt <= left
-            n += 1;
+            left = left.saturating_sub(dt.as_micros()); // dt <= left
+            n = n.saturating_add(1); // n < MAX_STEPS
         }
     }
 
@@ -820,7 +821,7 @@ fn push_config_line(out: &mut dyn TextOut, cal: &MagCalibration) -> Result<(), O
             push_str(out, ", ")?;
         }
         // q16 * 10^6 / 2^16 rounded: |q16| < 2^31, the product fits in i64
-        let micro = crate::math::div_round(i64::from(*q16) * 1_000_000, 65536).unwrap_or(0);
+        let micro = crate::math::div_round(i64::from(*q16).saturating_mul(1_000_000), 65536).unwrap_or(0);
         let magnitude = u32::try_from(micro.unsigned_abs()).unwrap_or(u32::MAX);
         push_fixed_parts(out, micro < 0, magnitude, 6)?;
     }

@@ -124,8 +124,8 @@ impl MagCalibrator {
         let comp = |i: usize| -> Option<i32> {
             let v = *adj.get(i)?;
             // |adj| < 2^17 (ASA-adjusted i16), so the sums cannot overflow.
-            let centre = (self.min.get(i)? + self.max.get(i)?) / 2;
-            Some(v - centre)
+            let centre = self.min.get(i)?.saturating_add(*self.max.get(i)?) / 2;
+            Some(v.saturating_sub(centre))
         };
         let (Some(df), Some(dr)) = (comp(f), comp(r)) else { return };
         if df.abs().max(dr.abs()) < self.min_radius {
@@ -133,7 +133,7 @@ impl MagCalibrator {
         }
         let a = atan2(dr, df);
         // sector = floor(angle / (1/12 turn)): < 12, no division.
-        let sector = ((u64::from(a.0) * u64::from(SECTORS)) >> 32) as u32;
+        let sector = (u64::from(a.0).saturating_mul(u64::from(SECTORS)) >> 32) as u32;
         self.sectors |= 1u16.checked_shl(sector).unwrap_or(0);
     }
 
@@ -166,17 +166,17 @@ impl MagCalibrator {
             self.min.iter().zip(self.max.iter()).zip(bias.iter_mut().zip(range.iter_mut())).enumerate()
         {
             // lo <= hi, both |.| < 2^17.
-            *r = i64::from(*hi) - i64::from(*lo);
+            *r = i64::from(*hi).saturating_sub(i64::from(*lo));
             if *r <= 0 {
                 return Err(CalibrationError::Degenerate { axis: i as u8 });
             }
-            *b = div_round(i64::from(*hi) + i64::from(*lo), 2).unwrap_or(0) as i32;
+            *b = div_round(i64::from(*hi).saturating_add(i64::from(*lo)), 2).unwrap_or(0) as i32;
         }
         // scale_i = (sum / 3) / range_i = sum / (3 range_i), in Q16.
         let sum: i64 = range.iter().sum();
         let mut scale_q16 = [0i32; 3];
         for (i, (s, r)) in scale_q16.iter_mut().zip(range.iter()).enumerate() {
-            let q = div_round(sum << 16, 3 * r).ok_or(CalibrationError::Degenerate { axis: i as u8 })?;
+            let q = div_round(sum << 16, r.saturating_mul(3)).ok_or(CalibrationError::Degenerate { axis: i as u8 })?;
             *s = i32::try_from(q).map_err(|_| CalibrationError::Degenerate { axis: i as u8 })?;
         }
         Ok(MagCalibration { bias, scale_q16 })
@@ -191,7 +191,7 @@ pub struct ConfigLine<'a>(pub &'a MagCalibration);
 
 /// Writes a Q16 value as a decimal with six places.
 fn write_q16(f: &mut fmt::Formatter<'_>, q16: i32) -> fmt::Result {
-    let micro = div_round(i64::from(q16) * 1_000_000, 65536).unwrap_or(0);
+    let micro = div_round(i64::from(q16).saturating_mul(1_000_000), 65536).unwrap_or(0);
     let sign = if micro < 0 { "-" } else { "" };
     let m = micro.unsigned_abs();
     write!(f, "{sign}{}.{:06}", m / 1_000_000, m % 1_000_000)

@@ -79,7 +79,7 @@ pub struct Vl53l0xCheck {
 /// macro clocks; `None` past 2^15 (more than a second of ranging, which
 /// this driver never sets and which would overflow the crate's products).
 fn decode_timeout(msb: u8, lsb: u8) -> Option<u32> {
-    (msb <= 7).then(|| (u32::from(lsb) << msb) + 1)
+    (msb <= 7).then(|| (u32::from(lsb) << msb).saturating_add(1)) // < 2^15 + 1
 }
 
 impl RegisterCheck for Vl53l0xCheck {

@@ -22,6 +22,7 @@ use crate::model::{ServoCmd, Trim};
 
 use super::Servos;
 
+#[allow(clippy::arithmetic_side_effects)] // compile time only; `%` by b != 0 (the loop's condition)
 const fn gcd(mut a: u64, mut b: u64) -> u64 {
     while b != 0 {
         let t = a % b;
@@ -51,13 +52,14 @@ const _: () = {
 /// The unclamped pulse width for `cmd`, ns (rounded to the nearest ns).
 pub const fn pulse_ns(cmd: ServoCmd) -> u32 {
     // cmd <= MAX, so the product fits (asserted above); DEN > 0.
-    config::servo::PULSE_AT_0_US * 1000 + (cmd.to_q8() as u32 * NUM + DEN / 2) / DEN
+    let frac = (cmd.to_q8() as u32).saturating_mul(NUM).saturating_add(DEN / 2) / DEN;
+    (config::servo::PULSE_AT_0_US * 1000).saturating_add(frac)
 }
 
 /// The pulse width sent for `cmd`: [`pulse_ns`] rounded to whole
 /// microseconds and clamped to the safe window.
 pub const fn pulse_width(cmd: ServoCmd) -> PulseWidthUs {
-    PulseWidthUs::safe((pulse_ns(cmd) + 500) / 1000)
+    PulseWidthUs::safe(pulse_ns(cmd).saturating_add(500) / 1000)
 }
 
 /// Both wheel servos on one pulse output.

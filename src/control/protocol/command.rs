@@ -134,8 +134,8 @@ impl Field {
             Field::TurnRate => (1, serial::MAX_TURN_MRAD_S as i32),
             Field::Duration => (1, serial::MAX_DURATION_MS as i32),
             Field::LeftCommand | Field::RightCommand => (0, 18_000),
-            Field::Trim => (-(serial::MAX_TRIM_CENTI as i32), serial::MAX_TRIM_CENTI as i32),
-            Field::X | Field::Y => (-(serial::MAX_POSE_MM as i32), serial::MAX_POSE_MM as i32),
+            Field::Trim => ((serial::MAX_TRIM_CENTI as i32).wrapping_neg(), serial::MAX_TRIM_CENTI as i32),
+            Field::X | Field::Y => ((serial::MAX_POSE_MM as i32).wrapping_neg(), serial::MAX_POSE_MM as i32),
             Field::Heading => (-360_000, 360_000),
             Field::Samples => (serial::MIN_CAL_SAMPLES as i32, serial::MAX_CAL_SAMPLES as i32),
             Field::Rate => (0, serial::MAX_TELEMETRY_HZ as i32),
@@ -295,10 +295,10 @@ fn number(token: &[u8], f: Field) -> Result<i32, ParseError> {
 
 /// 1/100 command steps to 1/256 steps, rounded (|centi| <= 18_000: no overflow).
 fn centi_to_q8(centi: i32) -> i32 {
-    let q8 = (centi.unsigned_abs() * 256 + 50) / 100;
+    let q8 = centi.unsigned_abs().saturating_mul(256).saturating_add(50) / 100;
     let q8 = q8 as i32; // <= 46_080
     if centi < 0 {
-        -q8
+        q8.wrapping_neg()
     } else {
         q8
     }
@@ -306,9 +306,9 @@ fn centi_to_q8(centi: i32) -> i32 {
 
 /// 1/256 command steps to 1/100 steps, rounded half away from zero.
 pub(super) fn q8_to_centi(q8: i32) -> i32 {
-    let c = ((q8.unsigned_abs().min(1 << 22) * 100 + 128) >> 8) as i32; // < 2^29
+    let c = (q8.unsigned_abs().min(1 << 22).saturating_mul(100).saturating_add(128) >> 8) as i32; // < 2^29
     if q8 < 0 {
-        -c
+        c.wrapping_neg()
     } else {
         c
     }

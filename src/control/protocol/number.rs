@@ -42,7 +42,7 @@ pub enum NumError {
 pub fn parse_fixed(token: &[u8], decimals: u32) -> Result<i32, NumError> {
     let (negative, mag) = parse_fixed_parts(token, decimals)?;
     // i64 only for the sign: -2^31 is an i32, +2^31 is not
-    let v = if negative { -i64::from(mag) } else { i64::from(mag) };
+    let v = if negative { i64::from(mag).wrapping_neg() } else { i64::from(mag) };
     i32::try_from(v).map_err(|_| NumError::Range)
 }
 
@@ -66,7 +66,10 @@ pub fn parse_fixed_parts(token: &[u8], decimals: u32) -> Result<(bool, u32), Num
         if !d.is_ascii_digit() {
             return Err(NumError::Bad);
         }
-        mag = mag.checked_mul(10).and_then(|m| m.checked_add(u32::from(d - b'0'))).ok_or(NumError::Range)?;
+        mag = mag
+            .checked_mul(10)
+            .and_then(|m| m.checked_add(u32::from(d.saturating_sub(b'0'))))
+            .ok_or(NumError::Range)?;
         Ok(())
     };
     for &d in int {
@@ -77,7 +80,7 @@ pub fn parse_fixed_parts(token: &[u8], decimals: u32) -> Result<(bool, u32), Num
     for &d in frac {
         if taken < decimals {
             push_digit(d)?;
-            taken += 1;
+            taken = taken.saturating_add(1);
         } else if d != b'0' {
             // a digit finer than the value's resolution (or not a digit)
             return Err(NumError::Bad);
@@ -85,7 +88,7 @@ pub fn parse_fixed_parts(token: &[u8], decimals: u32) -> Result<(bool, u32), Num
     }
     while taken < decimals {
         push_digit(b'0')?;
-        taken += 1;
+        taken = taken.saturating_add(1);
     }
     Ok((negative, mag))
 }
@@ -111,9 +114,9 @@ pub fn push_fixed_parts(out: &mut dyn TextOut, negative: bool, magnitude: u32, d
     let mut len = 0usize;
     let mut v = magnitude;
     for slot in digits.iter_mut().rev() {
-        *slot = b'0' + (v % 10) as u8; // v % 10 < 10
+        *slot = b'0'.saturating_add((v % 10) as u8); // v % 10 < 10
         v /= 10;
-        len += 1;
+        len = len.saturating_add(1); // at most digits.len() = 10
         if v == 0 && len > decimals {
             break;
         }
@@ -122,8 +125,8 @@ pub fn push_fixed_parts(out: &mut dyn TextOut, negative: bool, magnitude: u32, d
         push_byte(out, b'-')?;
     }
     // len <= 10 = digits.len(), so the start index cannot underflow
-    let used = digits.get(digits.len() - len..).unwrap_or(&[]);
-    let (int, frac) = used.split_at(len - decimals); // len > decimals
+    let used = digits.get(digits.len().saturating_sub(len)..).unwrap_or(&[]);
+    let (int, frac) = used.split_at_checked(len.saturating_sub(decimals)).unwrap_or((used, &[])); // len > decimals
     for &d in int {
         push_byte(out, d)?;
     }

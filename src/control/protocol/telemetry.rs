@@ -107,7 +107,7 @@ pub struct TelemetryRow {
 
 /// A length in 0.1 mm, rounded (|result| <= 327_680).
 fn length_dmm(l: Length) -> i32 {
-    ((i64::from(l.0) * 10 + (1 << 15)) >> 16) as i32
+    (i64::from(l.0).saturating_mul(10).saturating_add(1 << 15) >> 16) as i32
 }
 
 impl From<&Telemetry> for TelemetryRow {
@@ -189,8 +189,8 @@ fn cell(r: &TelemetryRow, i: usize) -> Cell {
         10 => Cell::opt(r.front_dmm, 1),
         11 => Cell::opt(r.right_raw_mm.map(i32::from), 0),
         12 => Cell::opt(r.right_dmm, 1),
-        13..=15 => mag(i - 13),
-        16..=18 => field(i - 16),
+        13..=15 => mag(i.saturating_sub(13)),
+        16..=18 => field(i.saturating_sub(16)),
         19 => r.compass_mdeg.map_or(Cell::Empty, |d| Cell::unsigned(d, 3)),
         20 => Cell::unsigned(f.bus, 0),
         21 => Cell::unsigned(f.timeout, 0),
@@ -294,7 +294,7 @@ mod row_parser {
             v.map(|v| u16::try_from(v).map_err(|_| err(i))).transpose()
         };
         let group = |first: usize| -> Result<Option<[i32; 3]>, RowError> {
-            match (opt(first, 0)?, opt(first + 1, 0)?, opt(first + 2, 0)?) {
+            match (opt(first, 0)?, opt(first.saturating_add(1), 0)?, opt(first.saturating_add(2), 0)?) {
                 (Some(a), Some(b), Some(c)) => Ok(Some([a, b, c])),
                 (None, None, None) => Ok(None),
                 _ => Err(err(first)),
@@ -325,7 +325,8 @@ mod row_parser {
             mag_raw: match group(13)? {
                 None => None,
                 Some(m) => {
-                    let axis = |k: usize| i16::try_from(m.get(k).copied().unwrap_or(0)).map_err(|_| err(13 + k));
+                    let axis =
+                        |k: usize| i16::try_from(m.get(k).copied().unwrap_or(0)).map_err(|_| err(k.saturating_add(13)));
                     Some([axis(0)?, axis(1)?, axis(2)?])
                 }
             },

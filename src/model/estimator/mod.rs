@@ -55,7 +55,9 @@
 //! instructions, a correction 1500-2500 depending on the division routine;
 //! the lx106 counts are the lead's benchmark's to confirm.
 
+// host only (std): replays CSV rows whose width is checked first
 #[cfg(feature = "std")]
+#[allow(clippy::indexing_slicing)]
 pub mod replay;
 
 use crate::config::estimator as cfg;
