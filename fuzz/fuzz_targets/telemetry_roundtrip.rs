@@ -93,7 +93,12 @@ fn faults(u: &mut Unstructured) -> Result<FaultCounters> {
 }
 
 fn pose(u: &mut Unstructured) -> Result<Pose> {
-    Ok(Pose::from_parts(Coord(i64::arbitrary(u)?), Coord(i64::arbitrary(u)?), Angle(u32::arbitrary(u)?), u16::arbitrary(u)?))
+    Ok(Pose::from_parts(
+        Coord(i64::arbitrary(u)?),
+        Coord(i64::arbitrary(u)?),
+        Angle(u32::arbitrary(u)?),
+        u16::arbitrary(u)?,
+    ))
 }
 
 fn lidar(u: &mut Unstructured) -> Result<Option<LidarSample>> {
