@@ -9,6 +9,8 @@
 #![no_main]
 
 mod bench;
+mod bench_loop;
+mod bench_trig;
 mod float;
 #[rustfmt::skip]
 mod host_bits;
@@ -23,6 +25,9 @@ pub extern "C" fn rust_main() -> i32 {
     println!("paperbot-lx106: the paperbot core on the lx106 ISA (qemu-system-xtensa -M sim -cpu lx106)");
     let (p1, f1) = suite::run();
     let (p2, f2) = bench::run();
+    let (p3, f3) = bench_loop::run();
+    bench_trig::run();
+    let (p2, f2) = (p2 + p3, f2 + f3);
     #[cfg(feature = "demo-fail")]
     let (p2, f2) = {
         println!("test demo::deliberate_failure ... FAILED: demo-fail feature");

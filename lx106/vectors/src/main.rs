@@ -472,20 +472,24 @@ fn generate_host_bits() -> String {
     o.push_str("];\n\n");
     let _ = writeln!(o, "/// `scripts::run_control`: the state after every tick.");
     o.push_str("pub const CONTROL: &[T] = &[\n");
-    scripts::run_control(|r| {
-        let _ = writeln!(
-            o,
-            "    T({}, {}, {:#010x}, {:#06x}, {:#010x}, {}, {:#010x}),",
-            r.0, r.1, r.2, r.3, r.4, r.5, r.6
-        );
-    }, &mut |_| {});
+    scripts::run_control(
+        |r| {
+            let _ = writeln!(
+                o,
+                "    T({}, {}, {:#010x}, {:#06x}, {:#010x}, {}, {:#010x}),",
+                r.0, r.1, r.2, r.3, r.4, r.5, r.6
+            );
+        },
+        &mut |_| {},
+    );
     o.push_str("];\n");
     o
 }
 
 fn main() {
     let here = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
-    let outputs = [(here.join("../src/vectors.rs"), generate()), (here.join("../src/host_bits.rs"), generate_host_bits())];
+    let outputs =
+        [(here.join("../src/vectors.rs"), generate()), (here.join("../src/host_bits.rs"), generate_host_bits())];
     let check = std::env::args().any(|a| a == "--check");
     let mut stale = false;
     for (path, text) in outputs {
