@@ -174,7 +174,7 @@ pub fn run_estimator(run: &EstRun, mut rec: impl FnMut(EstRec)) {
                 };
                 // +-6 mm noise; after the first 30 ticks (the estimate has
                 // settled) about every 23rd reading is a 250 mm spike (an outlier)
-                let spike = if rng.next() % 23 == 0 && tick >= 30 { 250 } else { 0 };
+                let spike = if rng.next().is_multiple_of(23) && tick >= 30 { 250 } else { 0 };
                 let z = z.saturating_add(Length::from_mm(rng.pm(6) + spike));
                 let u = est.update_lidar(id, z);
                 record(kind, Some(u), exp, &est, &mut rec);
