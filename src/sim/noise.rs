@@ -22,6 +22,9 @@ impl Rng {
         self.0 = x;
         x.wrapping_mul(0x2545_F491_4F6C_DD1D)
     }
+    pub fn next_u32(&mut self) -> u32 {
+        (self.next_u64() >> 32) as u32
+    }
     /// Uniform in [0, 1).
     pub fn uniform(&mut self) -> f64 {
         (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
@@ -31,6 +34,19 @@ impl Rng {
         let u1 = self.uniform().max(f64::MIN_POSITIVE);
         let u2 = self.uniform();
         (-2.0 * u1.ln()).sqrt() * (core::f64::consts::TAU * u2).cos()
+    }
+    /// Uniform in [lo, hi).
+    pub fn range_f64(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * self.uniform()
+    }
+    /// Uniform in lo..=hi (lo <= hi).
+    pub fn range_u32(&mut self, lo: u32, hi: u32) -> u32 {
+        let span = u64::from(hi.saturating_sub(lo)) + 1;
+        lo.saturating_add((self.next_u64() % span) as u32)
+    }
+    /// True with probability `p`.
+    pub fn chance(&mut self, p: f64) -> bool {
+        self.uniform() < p
     }
     /// Normal with standard deviation `sigma` (0 gives exactly 0 and draws nothing).
     pub fn gauss(&mut self, sigma: f64) -> f64 {

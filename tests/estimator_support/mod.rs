@@ -13,34 +13,7 @@ use paperbot::model::measurement::LidarId;
 use paperbot::model::{step, Motion, Pose, ServoCmd};
 use std::f64::consts::{PI, TAU};
 
-/// xorshift64* with Box-Muller normals.
-pub struct Rng(u64);
-
-impl Rng {
-    pub fn new(seed: u64) -> Rng {
-        Rng(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1)
-    }
-    pub fn next_u64(&mut self) -> u64 {
-        let mut x = self.0;
-        x ^= x >> 12;
-        x ^= x << 25;
-        x ^= x >> 27;
-        self.0 = x;
-        x.wrapping_mul(0x2545_F491_4F6C_DD1D)
-    }
-    /// Uniform in [0, 1).
-    pub fn uniform(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
-    }
-    pub fn normal(&mut self) -> f64 {
-        let u1 = self.uniform().max(1e-300);
-        let u2 = self.uniform();
-        (-2.0 * u1.ln()).sqrt() * (TAU * u2).cos()
-    }
-    pub fn chance(&mut self, p: f64) -> bool {
-        self.uniform() < p
-    }
-}
+pub use paperbot::sim::noise::Rng;
 
 /// Relative spread of the timed runs, per motion (rms over the command
 /// pairs of std/mean of the ten trials), from `tests/data/lab1/servo_runs.csv`.
