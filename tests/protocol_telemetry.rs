@@ -6,11 +6,14 @@ mod common;
 
 use common::rng::Rng;
 use heapless::String;
-use paperbot::control::protocol::number::{parse_fixed, push_fixed, push_i32, push_u32, NumError};
+use paperbot::control::protocol::number::{
+    div_rem_1000, div_rem_10k, parse_fixed, push_fixed, push_fixed_parts, push_i32, push_u32, NumError, TextOut,
+};
 use paperbot::control::protocol::{
     classify_line, format_row, format_status, format_telemetry, parse_telemetry_row, telemetry_header, FaultCounters,
     LineKind, RowError, Status, Telemetry, TelemetryRow, COLUMNS, HEADER, MAX_OUT_LINE, MAX_ROW, MAX_STATUS,
 };
+use paperbot::control::protocol::{OutLine, Overflow};
 use paperbot::driver::{CompassSample, LidarSample};
 use paperbot::math::{Angle, Coord, Length, Speed, TurnRate};
 use paperbot::model::compass::{MagCounts, MagField};
@@ -392,6 +395,126 @@ fn integer_decimal_formatting() {
     assert_eq!(parse_fixed(b"-.5", 1), Ok(-5));
     let mut tiny: String<3> = String::new();
     assert!(push_fixed(&mut tiny, -1234, 1).is_err());
+}
+
+/// What `push_fixed_parts` must write, by std formatting.
+fn std_fixed(negative: bool, magnitude: u32, decimals: u32) -> std::string::String {
+    let p = 10u64.pow(decimals);
+    let m = u64::from(magnitude);
+    let sign = if negative && magnitude != 0 { "-" } else { "" };
+    if decimals == 0 {
+        format!("{sign}{m}")
+    } else {
+        format!("{sign}{}.{:0w$}", m / p, m % p, w = decimals as usize)
+    }
+}
+
+/// The division-free digit routine against std formatting, for every
+/// number of decimals: every value below 2^18, every value within 3 of a
+/// power of ten, of a multiple of 10^4 up to 10^8 and of every multiple of
+/// 10^8, 10^4 multiples across the whole range, and random values.
+#[test]
+fn digits_without_division_match_std() {
+    let mut values: std::vec::Vec<u32> = (0..1 << 18).collect();
+    let mut near = |c: u64| {
+        for d in 0..=6u64 {
+            if let Some(v) = (c + d).checked_sub(3).and_then(|v| u32::try_from(v).ok()) {
+                values.push(v);
+            }
+        }
+    };
+    for k in 0..=9 {
+        near(10u64.pow(k));
+    }
+    for k in (0..=10_000u64).step_by(7) {
+        near(k * 10_000);
+    }
+    for k in 0..=42u64 {
+        near(k * 100_000_000);
+    }
+    near(u64::from(u32::MAX));
+    values.extend((0..=u32::MAX / 10_000).filter_map(|k| (k * 10_000).checked_add(k % 10_000)));
+    let mut rng = Rng::new(23);
+    values.extend((0..100_000).map(|_| rng.next_u32() >> rng.range_u32(0, 31)));
+    let mut out: String<16> = String::new();
+    for (i, &v) in values.iter().enumerate() {
+        // every value with a decimals count that changes along the list, the
+        // small ones with all of them
+        let all = v < 1 << 12;
+        for decimals in 0..=9u32 {
+            if !all && decimals as usize != i % 10 {
+                continue;
+            }
+            for negative in [false, true] {
+                out.clear();
+                push_fixed_parts(&mut out, negative, v, decimals).expect("fits");
+                assert_eq!(out.as_str(), std_fixed(negative, v, decimals), "{v} {decimals}");
+            }
+        }
+    }
+    // more than 9 decimals is 9
+    out.clear();
+    push_fixed_parts(&mut out, false, 1, 12).expect("fits");
+    assert_eq!(out.as_str(), "0.000000001");
+}
+
+/// The reciprocal divisions are exact for every u32: the multiply-high
+/// overshoots `v / d` by less than `1 / d`, so the only values it could get
+/// wrong are those just below a multiple of `d`; all of them are checked,
+/// with the multiples themselves.
+#[test]
+fn reciprocal_divisions_are_exact() {
+    for k in 0..=u32::MAX / 10_000 {
+        for v in [k * 10_000, k * 10_000 + 1, (k * 10_000).wrapping_sub(1)] {
+            assert_eq!(div_rem_10k(v), (v / 10_000, v % 10_000), "{v}");
+        }
+    }
+    for k in 0..=u32::MAX / 1000 {
+        for v in [k * 1000, (k * 1000).wrapping_sub(1)] {
+            assert_eq!(div_rem_1000(v), (v / 1000, v % 1000), "{v}");
+        }
+    }
+    let mut rng = Rng::new(29);
+    for v in (0..1_000_000).map(|_| rng.next_u32()).chain([u32::MAX, u32::MAX - 1]) {
+        assert_eq!(div_rem_10k(v), (v / 10_000, v % 10_000), "{v}");
+        assert_eq!(div_rem_1000(v), (v / 1000, v % 1000), "{v}");
+    }
+}
+
+/// OutLine (the control loop's line buffer) writes what a heapless String
+/// does for ASCII, stores anything else as `?`, and on overflow keeps what
+/// fitted and says so.
+#[test]
+fn out_line_buffer() {
+    let mut line: OutLine<12> = OutLine::new();
+    assert!(line.is_empty());
+    line.put_str("ab").unwrap();
+    line.put_byte(b'c').unwrap();
+    line.put_ascii(b"12").unwrap();
+    push_fixed(&mut line, -5, 2).unwrap();
+    assert_eq!(line.as_str(), "abc12-0.05");
+    assert_eq!(line.len(), 10);
+    line.clear();
+    line.put_str("h\u{e9}!").unwrap(); // two UTF-8 bytes, two `?`
+    line.put_byte(0xFF).unwrap();
+    line.put_ascii(&[b'x', 0x80]).unwrap();
+    assert_eq!(line.as_str(), "h??!?x?");
+    assert_eq!(line.put_ascii(b"123456"), Err(Overflow));
+    assert_eq!(line.as_str(), "h??!?x?12345");
+    assert_eq!(line.put_byte(b'z'), Err(Overflow));
+    assert_eq!(line.put_str(""), Ok(()));
+    assert_eq!(line.as_bytes().len(), 12);
+
+    // a telemetry row: the same text as in a String, and no room to spare
+    let row = TelemetryRow::from(&Telemetry { motion: Motion::Straight(Speed::from_mm_s(130)), ..quiet(1200) });
+    let mut a: OutLine<MAX_ROW> = OutLine::new();
+    let mut b: String<MAX_ROW> = String::new();
+    format_row(&row, &mut a).unwrap();
+    format_row(&row, &mut b).unwrap();
+    assert_eq!(a.as_str(), b.as_str());
+    let mut tiny: OutLine<20> = OutLine::new();
+    assert_eq!(format_row(&row, &mut tiny), Err(Overflow));
+    assert_eq!(tiny.as_str(), &b.as_str()[..20]);
 }
 
 /// No float type in the protocol's source: the robot gets no float code from

@@ -89,12 +89,14 @@
 pub mod command;
 pub mod line;
 pub mod number;
+pub mod out_line;
 pub mod response;
 pub mod telemetry;
 
 pub use command::{format_command, parse, Command, Field, ParseError, Side};
 pub use line::{Line, LineBuffer};
 pub use number::TextOut;
+pub use out_line::OutLine;
 pub use response::{format_response, format_status, Response, Status, ERR, HELP, OK};
 pub use telemetry::{
     classify_line, format_row, format_telemetry, telemetry_header, FaultCounters, LineKind, Telemetry, TelemetryRow,

@@ -37,14 +37,12 @@
 //! No allocation, no panics: every buffer is a bounded `heapless` one, every
 //! clock difference is wrapping or saturating, every index is checked.
 
-use heapless::String;
-
 use crate::config;
-use crate::control::protocol::number::{push_fixed_parts, push_str, push_u32, TextOut};
+use crate::control::protocol::number::{div_rem_1000, push_fixed_parts, push_str, push_u32, TextOut};
 use crate::control::protocol::Overflow;
 use crate::control::protocol::{
-    format_response, format_status, format_telemetry, telemetry_header, Command, FaultCounters, LineBuffer, ParseError,
-    Response, Side, Status, Telemetry, HELP, MAX_OUT_LINE,
+    format_response, format_status, format_telemetry, telemetry_header, Command, FaultCounters, LineBuffer, OutLine,
+    ParseError, Response, Side, Status, Telemetry, HELP, MAX_OUT_LINE,
 };
 use crate::driver::calibration::{CalStatus, CalibrationError, MagCalibrator};
 use crate::driver::{CompassSample, HeadingSensor, LidarSample, MagCalibrate, SensorError, Servos};
@@ -52,7 +50,7 @@ use crate::math::{Coord, Dt, Length, TurnRate};
 use crate::model::compass::MagCalibration;
 use crate::model::estimator::{Estimator, Update};
 use crate::model::measurement::{Arena, LidarId};
-use crate::model::{step, ActuatorModel, Drive, Motion, Pose, Range, ServoCmd};
+use crate::model::{advance, ActuatorModel, Drive, Motion, Pose, Range, ServoCmd};
 
 /// Where the loop writes its output lines (without terminators): the UART
 /// on the robot, a `Vec<String>` in tests, a channel in the simulator.
@@ -164,7 +162,7 @@ pub struct Controller<F, R, C, S> {
     /// The actuator model with the run-time trims.
     model: ActuatorModel,
     input: LineBuffer,
-    out: String<MAX_OUT_LINE>,
+    out: OutLine<MAX_OUT_LINE>,
 
     /// Loop clock, us since the first tick.
     clock_us: u64,
@@ -239,7 +237,7 @@ where
             servos,
             model,
             input: LineBuffer::new(),
-            out: String::new(),
+            out: OutLine::new(),
             clock_us: 0,
             last_now_us: None,
             command_seen: false,
@@ -441,6 +439,7 @@ where
     /// Integrates `motion` over `dt_us` in steps of at most [`Dt::MAX`]
     /// (a late tick of up to a second is integrated in full; beyond that
     /// the robot has stopped by the deadman anyway).
+    #[inline(never)]
     fn advance(&mut self, motion: Motion, dt_us: u32) {
         const MAX_STEPS: u32 = 16; // 16 * 65.5 ms > 1 s
         let mut left = dt_us;
@@ -448,7 +447,7 @@ where
         while left > 0 && n < MAX_STEPS {
             let dt = Dt::from_micros_saturating(left);
             self.estimator.predict(motion, dt);
-            self.dead = step(&self.dead, motion, dt);
+            advance(&mut self.dead, motion, dt); // in place: no copy of the pose
             left = left.saturating_sub(dt.as_micros()); // dt <= left
             n = n.saturating_add(1); // n < MAX_STEPS
         }
@@ -617,7 +616,7 @@ where
         }
         // integer formatting (no core::fmt on the robot); a line that does
         // not fit is cut short, which MAX_OUT_LINE makes impossible here
-        let mut text: String<MAX_OUT_LINE> = String::new();
+        let mut text: OutLine<MAX_OUT_LINE> = OutLine::new();
         let t = &mut text;
         let _ = match result {
             None => push_str(t, "calibration abandoned after ")
@@ -653,7 +652,7 @@ where
             Some(Ok(_)) | None => Response::Note(&text),
             Some(Err(_)) => Response::Fail(&text),
         };
-        let mut out: String<MAX_OUT_LINE> = String::new();
+        let mut out: OutLine<MAX_OUT_LINE> = OutLine::new();
         if format_response(&response, &mut out).is_ok() {
             sink.write_line(&out);
         }
@@ -701,7 +700,7 @@ where
 
     /// Loop clock in ms (wraps after 49 days: the truncation is intended).
     pub fn t_ms(&self) -> u32 {
-        (self.clock_us / 1_000) as u32
+        whole_ms(self.clock_us)
     }
     /// Loop clock, us since the first tick.
     pub fn clock_us(&self) -> u64 {
@@ -773,8 +772,7 @@ where
     /// What `status` reports.
     pub fn status(&self) -> Status {
         let now = self.clock_us;
-        let remaining_ms =
-            self.mode.timer().and_then(|t| t.remaining_us(now)).map(|us| (us / 1_000).min(u64::from(u32::MAX)) as u32);
+        let remaining_ms = self.mode.timer().and_then(|t| t.remaining_us(now)).map(us_to_ms);
         Status {
             t_ms: self.t_ms(),
             mode: self.mode.word(),
@@ -803,6 +801,46 @@ enum Reading {
 const _: () = assert!(config::timing::TELEMETRY_HZ <= config::serial::MAX_TELEMETRY_HZ as u32);
 const _: () = assert!((u16::MAX as u64) * (config::compass::CALIBRATION_MS_PER_SAMPLE as u64) <= u32::MAX as u64);
 
+/// `(us / 1000) as u32` (mod 2^32) without a 64-bit division (a ~430
+/// instruction call on the lx106): with `us = hi 2^32 + lo`, `lo = 1000 q +
+/// r` and `2^32 = 1000 * 4_294_967 + 296`, `us / 1000 = 4_294_967 hi + q +
+/// (296 hi + r) / 1000`.
+fn whole_ms(us: u64) -> u32 {
+    const HI_MAX: u32 = (u32::MAX - 999) / 296; // const-evaluated: 296 hi + r fits
+    let hi = (us >> 32) as u32; // < 2^32
+    let (q, r) = div_rem_1000(us as u32); // the low 32 bits
+    if hi == 0 {
+        return q; // the first 71 minutes
+    }
+    if hi > HI_MAX {
+        return (us / 1_000) as u32; // after 1,900 years
+    }
+    let (q2, _) = div_rem_1000(hi.wrapping_mul(296).wrapping_add(r)); // no wrap: hi <= HI_MAX
+    hi.wrapping_mul(4_294_967).wrapping_add(q).wrapping_add(q2) // mod 2^32, as the cast
+}
+
+/// us to whole ms, at most `u32::MAX` (a multiply by the reciprocal for
+/// the usual values below 2^32 us, 71 minutes).
+fn us_to_ms(us: u64) -> u32 {
+    match u32::try_from(us) {
+        Ok(us) => div_rem_1000(us).0,
+        Err(_) => u32::try_from(us / 1_000).unwrap_or(u32::MAX),
+    }
+}
+
+/// `|q16| * 10^6 / 2^16` rounded half up, saturating at `u32::MAX`, in 32
+/// bits: `10^6 / 2^16 = 15625 / 2^10`, and with `a = h 2^10 + l` that is
+/// `15625 h + ((15625 l + 2^9) >> 10)` (`15625 l + 2^9 < 2^24`).
+fn q16_to_micro(a: u32) -> u32 {
+    const H_MAX: u32 = u32::MAX / 15_625; // const-evaluated
+    let (h, l) = (a >> 10, a & 0x3FF);
+    if h > H_MAX {
+        return u32::MAX;
+    }
+    // h <= H_MAX: 15625 h fits
+    h.wrapping_mul(15_625).saturating_add(l.wrapping_mul(15_625).wrapping_add(1 << 9) >> 10)
+}
+
 /// The `CALIBRATION` line of `config::compass` for `cal`, ready to paste
 /// (the same text as `driver::calibration::ConfigLine`, written without
 /// `core::fmt`): biases as integers, scales with six decimals.
@@ -820,10 +858,55 @@ fn push_config_line(out: &mut dyn TextOut, cal: &MagCalibration) -> Result<(), O
         if i > 0 {
             push_str(out, ", ")?;
         }
-        // q16 * 10^6 / 2^16 rounded: |q16| < 2^31, the product fits in i64
-        let micro = crate::math::div_round(i64::from(*q16).saturating_mul(1_000_000), 65536).unwrap_or(0);
-        let magnitude = u32::try_from(micro.unsigned_abs()).unwrap_or(u32::MAX);
-        push_fixed_parts(out, micro < 0, magnitude, 6)?;
+        // q16 * 10^6 / 2^16 rounded half away from zero (as math::div_round)
+        push_fixed_parts(out, *q16 < 0, q16_to_micro(q16.unsigned_abs()), 6)?;
     }
     push_str(out, "]);")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{q16_to_micro, us_to_ms, whole_ms};
+
+    #[test]
+    fn whole_ms_is_the_truncated_quotient() {
+        let check = |us: u64| {
+            assert_eq!(whole_ms(us), (us / 1000) as u32, "{us}");
+            assert_eq!(us_to_ms(us), (us / 1000).min(u64::from(u32::MAX)) as u32, "{us}");
+        };
+        for us in [0, 1, 999, 1000, u64::from(u32::MAX), 1 << 32, u64::MAX, u64::MAX - 1] {
+            check(us);
+        }
+        // around HI_MAX = (2^32 - 1000) / 296 = 14_510_021 and both ends of lo
+        for hi in [1u64, 2, 295, 296, 1000, 14_510_020, 14_510_021, 14_510_022, u64::from(u32::MAX)] {
+            for lo in [0u64, 1, 703, 704, 999, 1000, 123_456_789, u64::from(u32::MAX) - 1, u64::from(u32::MAX)] {
+                check(hi << 32 | lo);
+            }
+        }
+        let mut x: u64 = 0x9E37_79B9_7F4A_7C15;
+        for _ in 0..200_000 {
+            // xorshift64, shifted to cover every magnitude
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            check(x >> (x % 64));
+        }
+    }
+
+    #[test]
+    fn q16_to_micro_rounds_half_up_and_saturates() {
+        let mut a: u32 = 0;
+        loop {
+            let want = ((u64::from(a) * 1_000_000 + (1 << 15)) >> 16).min(u64::from(u32::MAX)) as u32;
+            assert_eq!(q16_to_micro(a), want, "{a}");
+            match a.checked_add(a / 1024 + 1) {
+                Some(n) => a = n,
+                None => break,
+            }
+        }
+        for a in (0..1 << 20).chain([u32::MAX, u32::MAX - 1, 1 << 31, 274_877, 274_878, 281_474_976]) {
+            let want = ((u64::from(a) * 1_000_000 + (1 << 15)) >> 16).min(u64::from(u32::MAX)) as u32;
+            assert_eq!(q16_to_micro(a), want, "{a}");
+        }
+    }
 }

@@ -1,7 +1,10 @@
 //! Decimal numbers in fixed point, with integer code only: parsing a token
 //! like `-0.130` into a scaled integer, and writing a scaled integer back as
 //! a decimal. No formatting machinery (whose float code would otherwise
-//! reach the robot), no 64-bit multiply or divide: every value is a `u32` magnitude.
+//! reach the robot), no 64-bit arithmetic and no division: the lx106 has no
+//! divide instruction (`/ 10` is a ~65-instruction `__udivsi3` call per
+//! digit), so digits come from multiplications by reciprocals that stay in
+//! 32 bits ([`div_rem_10k`], [`div_rem_1000`]).
 
 use heapless::String;
 
@@ -15,14 +18,34 @@ pub trait TextOut {
     fn put_str(&mut self, s: &str) -> Result<(), Overflow>;
     /// Appends one ASCII byte (a non-ASCII byte is written as `?`).
     fn put_byte(&mut self, b: u8) -> Result<(), Overflow>;
+    /// Appends ASCII bytes (each non-ASCII byte is written as `?`), or
+    /// fails leaving what fitted. One call per number or cell, rather than
+    /// one per byte.
+    fn put_ascii(&mut self, bytes: &[u8]) -> Result<(), Overflow> {
+        for &b in bytes {
+            self.put_byte(b)?;
+        }
+        Ok(())
+    }
 }
 
+// Never inlined: one copy of each per buffer size rather than one per call
+// site (the formatters' calls are devirtualised where the buffer is known).
 impl<const N: usize> TextOut for String<N> {
+    #[inline(never)]
     fn put_str(&mut self, s: &str) -> Result<(), Overflow> {
         self.push_str(s).map_err(|_| Overflow)
     }
+    #[inline(never)]
     fn put_byte(&mut self, b: u8) -> Result<(), Overflow> {
         self.push(if b.is_ascii() { char::from(b) } else { '?' }).map_err(|_| Overflow)
+    }
+    #[inline(never)]
+    fn put_ascii(&mut self, bytes: &[u8]) -> Result<(), Overflow> {
+        for &b in bytes {
+            self.push(if b.is_ascii() { char::from(b) } else { '?' }).map_err(|_| Overflow)?;
+        }
+        Ok(())
     }
 }
 
@@ -66,10 +89,13 @@ pub fn parse_fixed_parts(token: &[u8], decimals: u32) -> Result<(bool, u32), Num
         if !d.is_ascii_digit() {
             return Err(NumError::Bad);
         }
-        mag = mag
-            .checked_mul(10)
-            .and_then(|m| m.checked_add(u32::from(d.saturating_sub(b'0'))))
-            .ok_or(NumError::Range)?;
+        // mag * 10 overflows exactly when mag > u32::MAX / 10 (a compare: an
+        // overflow-checked multiply would be a 64-bit product on the lx106)
+        const MAG_MAX: u32 = u32::MAX / 10; // const-evaluated
+        if mag > MAG_MAX {
+            return Err(NumError::Range);
+        }
+        mag = mag.wrapping_mul(10).checked_add(u32::from(d.saturating_sub(b'0'))).ok_or(NumError::Range)?;
         Ok(())
     };
     for &d in int {
@@ -103,48 +129,255 @@ pub fn push_byte(out: &mut dyn TextOut, b: u8) -> Result<(), Overflow> {
     out.put_byte(b)
 }
 
+/// The high 32 bits of the 64-bit product `a * b`, from four 16 x 16-bit
+/// products (the lx106 has a 32-bit `MULL` but no multiply-high, and a
+/// `u64` product would be a `__muldi3` call).
+#[inline]
+fn mul_hi_u32(a: u32, b: u32) -> u32 {
+    let (a1, a0) = (a >> 16, a & 0xFFFF);
+    let (b1, b0) = (b >> 16, b & 0xFFFF);
+    // each factor < 2^16: every partial product < 2^32
+    let lo = a0.wrapping_mul(b0);
+    let m1 = a1.wrapping_mul(b0);
+    let m2 = a0.wrapping_mul(b1);
+    let hi = a1.wrapping_mul(b1);
+    // three terms < 2^16 each: < 2^18
+    let mid = (lo >> 16).wrapping_add(m1 & 0xFFFF).wrapping_add(m2 & 0xFFFF);
+    // the sum is floor(a * b / 2^32) <= (2^32 - 1)^2 / 2^32 < 2^32: no wrap
+    hi.wrapping_add(m1 >> 16).wrapping_add(m2 >> 16).wrapping_add(mid >> 16)
+}
+
+/// `(v / 10_000, v % 10_000)` for every `u32`, without a division:
+/// `q = floor(v * m / 2^45)` with `m = ceil(2^45 / 10^4) = 0xD1B7_1759` (the
+/// reciprocal GCC and LLVM use). `m = 2^45 / 10^4 + e` with `e < 0.12`, so
+/// `v * m / 2^45` exceeds `v / 10^4` by less than `2^32 * 0.12 / 2^45 < 1.5e-5`,
+/// less than the gap of `10^-4` from `v / 10^4` up to the next integer: the
+/// floor is exact (tests check every `v` just below a multiple of 10^4, the
+/// only place an error could show).
+#[inline]
+pub fn div_rem_10k(v: u32) -> (u32, u32) {
+    let q = mul_hi_u32(v, 0xD1B7_1759) >> 13;
+    // q * 10^4 <= v: neither wraps
+    (q, v.wrapping_sub(q.wrapping_mul(10_000)))
+}
+
+/// `(v / 1000, v % 1000)` for every `u32`, without a division: `m =
+/// ceil(2^38 / 1000) = 0x1062_4DD3 = 2^38 / 1000 + e`, `e < 0.06`; the excess
+/// `2^32 * 0.06 / 2^38 < 1e-3` stays below the gap of `10^-3` (see
+/// [`div_rem_10k`]; tests check every `v` just below a multiple of 1000).
+#[inline]
+pub fn div_rem_1000(v: u32) -> (u32, u32) {
+    let q = mul_hi_u32(v, 0x1062_4DD3) >> 6;
+    // q * 1000 <= v: neither wraps
+    (q, v.wrapping_sub(q.wrapping_mul(1000)))
+}
+
+/// `(v / 10, v % 10)` for `v < 81_920`: `(v * 0xCCCD) >> 19` (`0xCCCD =
+/// ceil(2^19 / 10)`, the product < 2^32; exact in that range, a test checks
+/// every value).
+#[inline]
+fn div_rem_10_small(v: u32) -> (u32, u32) {
+    let q = v.wrapping_mul(0xCCCD) >> 19;
+    // q * 10 <= v
+    (q, v.wrapping_sub(q.wrapping_mul(10)))
+}
+
+/// Decimal digits of `v` (1 for 0), by comparisons.
+#[inline]
+fn digit_count(v: u32) -> usize {
+    if v < 10_000 {
+        if v < 100 {
+            if v < 10 {
+                1
+            } else {
+                2
+            }
+        } else if v < 1_000 {
+            3
+        } else {
+            4
+        }
+    } else if v < 100_000_000 {
+        if v < 1_000_000 {
+            if v < 100_000 {
+                5
+            } else {
+                6
+            }
+        } else if v < 10_000_000 {
+            7
+        } else {
+            8
+        }
+    } else if v < 1_000_000_000 {
+        9
+    } else {
+        10
+    }
+}
+
+/// Text written left to right into a byte slice: the formatters' fast path
+/// (a telemetry row is built in one and handed to [`TextOut::put_ascii`] in
+/// one piece). Bytes that do not fit are dropped and remembered.
+pub(super) struct Cursor<'a> {
+    buf: &'a mut [u8],
+    len: usize,
+    overflow: bool,
+}
+
+impl<'a> Cursor<'a> {
+    pub(super) fn new(buf: &'a mut [u8]) -> Cursor<'a> {
+        Cursor { buf, len: 0, overflow: false }
+    }
+
+    pub(super) fn push(&mut self, b: u8) {
+        match self.buf.get_mut(self.len) {
+            Some(slot) => {
+                *slot = b;
+                self.len = self.len.wrapping_add(1); // < buf.len() before
+            }
+            None => self.overflow = true,
+        }
+    }
+
+    pub(super) fn push_bytes(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.push(b);
+        }
+    }
+
+    /// `magnitude / 10^decimals` as in [`push_fixed_parts`]: the length is
+    /// counted first, then the digits are written from the last, four per
+    /// reciprocal multiply by 10^4 and one per multiply by the reciprocal of
+    /// 10 (no division).
+    pub(super) fn push_fixed(&mut self, negative: bool, magnitude: u32, decimals: u32) {
+        if negative && magnitude != 0 {
+            self.push(b'-');
+        }
+        let decimals = decimals.min(9) as usize;
+        // digits <= 10 (u32::MAX has 10, decimals + 1 <= 10), text <= 11 bytes
+        let digits = digit_count(magnitude).max(decimals.wrapping_add(1));
+        let text_len = digits.wrapping_add(usize::from(decimals > 0));
+        let end = self.len.wrapping_add(text_len); // both small
+        let Some(dst) = self.buf.get_mut(self.len..end) else {
+            self.overflow = true;
+            return;
+        };
+        // index of the point in dst (none without decimals): decimals digits after it
+        let point = if decimals == 0 { usize::MAX } else { text_len.wrapping_sub(decimals).wrapping_sub(1) };
+        let mut p = text_len; // next index written is p - 1
+        let mut put = |d: u32| {
+            p = p.wrapping_sub(1);
+            if p == point {
+                if let Some(slot) = dst.get_mut(p) {
+                    *slot = b'.';
+                }
+                p = p.wrapping_sub(1);
+            }
+            if let Some(slot) = dst.get_mut(p) {
+                *slot = b'0'.wrapping_add(d as u8); // d < 10
+            }
+        };
+        let mut v = magnitude;
+        let mut left = digits;
+        // whole groups of four while more than four digits are left (at most
+        // twice); then v < 10^left <= 10^4 (v has at most `left` digits)
+        while left > 4 {
+            let (q, mut r) = div_rem_10k(v);
+            for _ in 0..4 {
+                let (q10, d) = div_rem_10_small(r); // r < 10^4
+                put(d);
+                r = q10;
+            }
+            v = q;
+            left = left.wrapping_sub(4);
+        }
+        for _ in 0..left {
+            let (q10, d) = div_rem_10_small(v); // v < 10^4
+            put(d);
+            v = q10;
+        }
+        self.len = end;
+    }
+
+    /// `sep`, then a signed scaled value (see [`push_fixed_parts`]).
+    pub(super) fn signed(&mut self, v: i32, decimals: u32, sep: u8) {
+        self.push(sep);
+        self.push_fixed(v < 0, v.unsigned_abs(), decimals);
+    }
+
+    /// An unsigned scaled value (see [`push_fixed_parts`]).
+    pub(super) fn unsigned(&mut self, v: u32, decimals: u32) {
+        self.push_fixed(false, v, decimals);
+    }
+
+    /// A comma, then the value if there is one.
+    pub(super) fn optional(&mut self, v: Option<i32>, decimals: u32) {
+        self.push(b',');
+        if let Some(v) = v {
+            self.push_fixed(v < 0, v.unsigned_abs(), decimals);
+        }
+    }
+
+    /// Starts again at the beginning of the buffer.
+    pub(super) fn clear(&mut self) {
+        self.len = 0;
+        self.overflow = false;
+    }
+
+    /// What was written.
+    pub(super) fn bytes(&self) -> &[u8] {
+        self.buf.get(..self.len).unwrap_or(&[])
+    }
+
+    /// Appends what was written to `out`; fails if anything was dropped.
+    pub(super) fn flush(&self, out: &mut dyn TextOut) -> Result<(), Overflow> {
+        out.put_ascii(self.bytes())?;
+        if self.overflow {
+            Err(Overflow)
+        } else {
+            Ok(())
+        }
+    }
+}
+
+/// Appends `prefix` (unless 0), then `magnitude / 10^decimals` as in
+/// [`push_fixed_parts`], in one [`TextOut::put_ascii`].
+#[inline(never)]
+pub(super) fn put_number(
+    out: &mut dyn TextOut,
+    prefix: u8,
+    negative: bool,
+    magnitude: u32,
+    decimals: u32,
+) -> Result<(), Overflow> {
+    // prefix, sign, 10 digits and the point: 13 bytes
+    let mut buf = [0u8; 13];
+    let mut text = Cursor::new(&mut buf);
+    if prefix != 0 {
+        text.push(prefix);
+    }
+    text.push_fixed(negative, magnitude, decimals);
+    text.flush(out)
+}
+
 /// Appends `magnitude / 10^decimals` as a decimal with exactly `decimals`
 /// digits after the point (none and no point when `decimals` is 0), with a
 /// `-` in front when `negative` and the magnitude is not zero.
 /// `decimals` above 9 is treated as 9.
+#[inline(never)]
 pub fn push_fixed_parts(out: &mut dyn TextOut, negative: bool, magnitude: u32, decimals: u32) -> Result<(), Overflow> {
-    // u32::MAX has 10 digits; with up to 9 decimals a leading zero makes 10.
-    let mut digits = [0u8; 10];
-    let decimals = decimals.min(9) as usize;
-    let mut len = 0usize;
-    let mut v = magnitude;
-    for slot in digits.iter_mut().rev() {
-        *slot = b'0'.saturating_add((v % 10) as u8); // v % 10 < 10
-        v /= 10;
-        len = len.saturating_add(1); // at most digits.len() = 10
-        if v == 0 && len > decimals {
-            break;
-        }
-    }
-    if negative && magnitude != 0 {
-        push_byte(out, b'-')?;
-    }
-    // len <= 10 = digits.len(), so the start index cannot underflow
-    let used = digits.get(digits.len().saturating_sub(len)..).unwrap_or(&[]);
-    let (int, frac) = used.split_at_checked(len.saturating_sub(decimals)).unwrap_or((used, &[])); // len > decimals
-    for &d in int {
-        push_byte(out, d)?;
-    }
-    if decimals > 0 {
-        push_byte(out, b'.')?;
-        for &d in frac {
-            push_byte(out, d)?;
-        }
-    }
-    Ok(())
+    put_number(out, 0, negative, magnitude, decimals)
 }
 
 /// Appends a signed scaled value as a decimal (see [`push_fixed_parts`]).
+#[inline(never)]
 pub fn push_fixed(out: &mut dyn TextOut, value: i32, decimals: u32) -> Result<(), Overflow> {
     push_fixed_parts(out, value < 0, value.unsigned_abs(), decimals)
 }
 
 /// Appends an unsigned integer.
+#[inline(never)]
 pub fn push_u32(out: &mut dyn TextOut, value: u32) -> Result<(), Overflow> {
     push_fixed_parts(out, false, value, 0)
 }

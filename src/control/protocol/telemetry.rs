@@ -2,7 +2,7 @@
 //! written from integers at a fixed resolution, and [`TelemetryRow`] is
 //! exactly what a row holds, so parsing a row gives back the row's values.
 
-use super::number::{push_fixed_parts, push_str, TextOut};
+use super::number::{Cursor, TextOut};
 use super::Overflow;
 use crate::driver::{CompassSample, LidarSample};
 use crate::math::Length;
@@ -105,9 +105,13 @@ pub struct TelemetryRow {
     pub faults: FaultCounters,
 }
 
-/// A length in 0.1 mm, rounded (|result| <= 327_680).
+/// A length in 0.1 mm, rounded (|result| <= 327_680): `(10 l + 2^15) >> 16`
+/// in 32 bits. With `l = h 2^16 + f` (`h = l >> 16` in -2^15..2^15, `f` in
+/// 0..2^16) that is `10 h + ((10 f + 2^15) >> 16)`, as `10 h 2^16` is a
+/// multiple of 2^16; `10 f + 2^15 < 2^20` and `|10 h| <= 327_680`.
 fn length_dmm(l: Length) -> i32 {
-    (i64::from(l.0).saturating_mul(10).saturating_add(1 << 15) >> 16) as i32
+    let (h, f) = (l.0 >> 16, l.0 & 0xFFFF);
+    h.wrapping_mul(10).wrapping_add(f.wrapping_mul(10).wrapping_add(1 << 15) >> 16)
 }
 
 impl From<&Telemetry> for TelemetryRow {
@@ -150,72 +154,55 @@ pub fn format_telemetry(t: &Telemetry, out: &mut dyn TextOut) -> Result<(), Over
     format_row(&TelemetryRow::from(t), out)
 }
 
-/// One CSV cell: empty, a word, or a decimal (sign, magnitude, decimals).
-#[derive(Clone, Copy)]
-enum Cell {
-    Empty,
-    Word(&'static str),
-    Num(bool, u32, u32),
-}
-
-impl Cell {
-    fn signed(v: i32, decimals: u32) -> Cell {
-        Cell::Num(v < 0, v.unsigned_abs(), decimals)
-    }
-    fn unsigned(v: u32, decimals: u32) -> Cell {
-        Cell::Num(false, v, decimals)
-    }
-    fn opt(v: Option<i32>, decimals: u32) -> Cell {
-        v.map_or(Cell::Empty, |v| Cell::signed(v, decimals))
-    }
-}
-
-/// Column `i` of a row (empty past the last column).
-fn cell(r: &TelemetryRow, i: usize) -> Cell {
-    let mag = |k: usize| Cell::opt(r.mag_raw.and_then(|m| m.get(k).copied()).map(i32::from), 0);
-    let field = |k: usize| Cell::opt(r.mag_field.and_then(|m| m.get(k).copied()), 0);
-    let f = &r.faults;
-    match i {
-        0 => Cell::unsigned(r.t_ms, 0),
-        1 => Cell::signed(r.x_dmm, 1),
-        2 => Cell::signed(r.y_dmm, 1),
-        3 => Cell::unsigned(r.heading_mdeg, 3),
-        4 => Cell::Word(motion_word(r.motion)),
-        5 => Cell::signed(r.v_mm_s, 3),
-        6 => Cell::signed(r.w_mrad_s, 3),
-        7 => Cell::unsigned(r.left_cmd_centi, 2),
-        8 => Cell::unsigned(r.right_cmd_centi, 2),
-        9 => Cell::opt(r.front_raw_mm.map(i32::from), 0),
-        10 => Cell::opt(r.front_dmm, 1),
-        11 => Cell::opt(r.right_raw_mm.map(i32::from), 0),
-        12 => Cell::opt(r.right_dmm, 1),
-        13..=15 => mag(i.saturating_sub(13)),
-        16..=18 => field(i.saturating_sub(16)),
-        19 => r.compass_mdeg.map_or(Cell::Empty, |d| Cell::unsigned(d, 3)),
-        20 => Cell::unsigned(f.bus, 0),
-        21 => Cell::unsigned(f.timeout, 0),
-        22 => Cell::unsigned(f.missing, 0),
-        23 => Cell::unsigned(f.bad_sample, 0),
-        24 => Cell::unsigned(f.rejected_outliers, 0),
-        25 => Cell::unsigned(f.overruns, 0),
-        _ => Cell::Empty,
-    }
-}
-
-/// Appends a row's values as CSV (no terminator). Column by column through
-/// `cell`: one loop, which keeps the robot's code and stack frame small.
+/// Appends a row's values as CSV (no terminator). The text is built in a
+/// local buffer, column by column in straight-line code, and appended in
+/// three pieces rather than byte by byte.
+#[inline(never)]
 pub fn format_row(r: &TelemetryRow, out: &mut dyn TextOut) -> Result<(), Overflow> {
-    for i in 0..COLUMNS {
-        if i > 0 {
-            out.put_byte(b',')?;
-        }
-        match cell(r, i) {
-            Cell::Empty => {}
-            Cell::Word(w) => push_str(out, w)?,
-            Cell::Num(negative, magnitude, decimals) => push_fixed_parts(out, negative, magnitude, decimals)?,
-        }
+    // Widest columns of any TelemetryRow (not only one from Telemetry):
+    // 0..=8 (t_ms 10, x/y 12 each, heading 11, motion 4, v/w 12 each,
+    // commands 11 each) 103 bytes with their commas, 9..=19 (raw 5, distance
+    // 12, twice; mag 6 x 3, field 11 x 3, compass 11) 107 with the comma in
+    // front, 20..=25 (counters 10 x 6) 66: each piece fits the buffer.
+    let mut buf = [0u8; 112];
+    let mut row = Cursor::new(&mut buf);
+    let f = &r.faults;
+    row.unsigned(r.t_ms, 0);
+    row.signed(r.x_dmm, 1, b',');
+    row.signed(r.y_dmm, 1, b',');
+    row.push(b',');
+    row.unsigned(r.heading_mdeg, 3);
+    row.push(b',');
+    row.push_bytes(motion_word(r.motion).as_bytes());
+    row.signed(r.v_mm_s, 3, b',');
+    row.signed(r.w_mrad_s, 3, b',');
+    row.push(b',');
+    row.unsigned(r.left_cmd_centi, 2);
+    row.push(b',');
+    row.unsigned(r.right_cmd_centi, 2);
+    row.flush(out)?;
+    row.clear();
+    row.optional(r.front_raw_mm.map(i32::from), 0);
+    row.optional(r.front_dmm, 1);
+    row.optional(r.right_raw_mm.map(i32::from), 0);
+    row.optional(r.right_dmm, 1);
+    for k in 0..3 {
+        row.optional(r.mag_raw.and_then(|m| m.get(k).copied()).map(i32::from), 0);
     }
-    Ok(())
+    for k in 0..3 {
+        row.optional(r.mag_field.and_then(|m| m.get(k).copied()), 0);
+    }
+    row.push(b',');
+    if let Some(d) = r.compass_mdeg {
+        row.unsigned(d, 3);
+    }
+    row.flush(out)?;
+    row.clear();
+    for count in [f.bus, f.timeout, f.missing, f.bad_sample, f.rejected_outliers, f.overruns] {
+        row.push(b',');
+        row.unsigned(count, 0);
+    }
+    row.flush(out)
 }
 
 /// What kind of line came from the robot.
