@@ -80,3 +80,43 @@ fn div_round_rounds_half_away_from_zero() {
     }
     assert_eq!(div_round(1, 0), None);
 }
+
+#[test]
+fn mul_wide_is_the_exact_i64_product() {
+    use paperbot::math::mul_wide;
+    // the corners and the 16-bit seams, then a pseudo-random sweep
+    let edges = [
+        0,
+        1,
+        -1,
+        2,
+        0xFFFF,
+        0x1_0000,
+        -0x1_0000,
+        0x7FFF_FFFF,
+        i32::MIN,
+        i32::MIN + 1,
+        0x7FFF_0000,
+        -0x7FFF_0001,
+        0x1234_5678,
+        -0x0FED_CBA9,
+        1 << 30,
+        -(1 << 30),
+    ];
+    for &a in &edges {
+        for &b in &edges {
+            assert_eq!(mul_wide(a, b), i64::from(a) * i64::from(b), "{a} * {b}");
+        }
+    }
+    let mut x = 0x2545_F491_4F6C_DD1Du64;
+    for _ in 0..200_000 {
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        let (a, b) = (x as i32, (x >> 32) as i32);
+        assert_eq!(mul_wide(a, b), i64::from(a) * i64::from(b), "{a} * {b}");
+        // and with small operands (the estimator's typical ones)
+        let (c, d) = (a >> (x % 24) as u32, b >> ((x >> 8) % 24) as u32);
+        assert_eq!(mul_wide(c, d), i64::from(c) * i64::from(d), "{c} * {d}");
+    }
+}

@@ -41,7 +41,7 @@
 
 use crate::config;
 use crate::config::geometry::LidarMount;
-use crate::math::{mul_hi, sin_cos, Angle, Length};
+use crate::math::{mul_hi, sin_cos, Angle, Coord, Length};
 use crate::model::state::Pose;
 
 /// A rectangular arena with its origin at a corner (see the module docs).
@@ -101,11 +101,30 @@ impl Wall {
     }
 }
 
+/// Three quarters of a turn, as an [`Angle`]'s bits.
+const THREE_QUARTERS: u32 = 3 << 30;
+
 /// `a * s` for `s` in Q2.30 (|s| <= 1): [`mul_hi`] gives Q-2, shifted back.
 /// Within 12 LSB of the exact product; saturates instead of overflowing.
 #[inline(always)]
 pub(crate) fn mul_q30(a: i32, s: i32) -> i32 {
     mul_hi(a, s).saturating_mul(4)
+}
+
+/// [`Coord::to_length`] (rounded to nearest, saturated to +-32.7 m) without
+/// the 64-bit saturating add: `(c + 2^15) >> 16` is `(c >> 16)` plus bit 15
+/// of `c`, which cannot overflow (about 12 lx106 instructions against ~50).
+#[inline(always)]
+fn coord_length(c: Coord) -> Length {
+    let v = (c.0 >> 16) + ((c.0 >> 15) & 1); // |c >> 16| <= 2^47
+    let lo = v as i32;
+    if i64::from(lo) == v {
+        Length(lo)
+    } else if v < 0 {
+        Length(i32::MIN)
+    } else {
+        Length::MAX
+    }
 }
 
 /// The geometry of one lidar beam in the arena for one pose: which wall it
@@ -134,18 +153,41 @@ pub struct Beam {
 }
 
 impl Beam {
-    /// The beam of `mount` for `pose` in `arena`. About 60 lx106
-    /// instructions plus one [`sin_cos`]; no division.
+    /// The beam of `mount` for `pose` in `arena`. No division; the sine and
+    /// cosine of the heading come from the pose's cache (one [`sin_cos`]
+    /// when it is stale), turned by the mount's direction: exactly for a
+    /// multiple of a quarter turn (both of the config's mounts), otherwise by
+    /// two more [`sin_cos`].
     pub fn new(arena: &Arena, pose: &Pose, mount: &LidarMount) -> Beam {
         let direction = pose.theta.wrapping_add(mount.direction);
-        let (sin, cos) = sin_cos(direction);
-        // lateral = -forward sin(dir) + right cos(dir), in the car's frame.
-        let (sd, cd) = sin_cos(mount.direction);
-        let lateral = Length(mul_q30(mount.right.0, cd).saturating_sub(mul_q30(mount.forward.0, sd)));
-        // Beam origin o = p + lateral (-sin phi, cos phi).
-        let (px, py) = (pose.x.to_length(), pose.y.to_length());
-        let ox = px.saturating_sub(Length(mul_q30(lateral.0, sin)));
-        let oy = py.saturating_add(Length(mul_q30(lateral.0, cos)));
+        // a copy: `Pose::sin_cos` refreshes its cache, and only reads it when current
+        let (st, ct) = { *pose }.sin_cos();
+        // |sin|, |cos| <= 2^30: the negations cannot overflow.
+        const ONE: i32 = 1 << 30;
+        let ((sin, cos), (sd, cd)) = match mount.direction {
+            Angle::ZERO => ((st, ct), (0, ONE)),
+            Angle::QUARTER_TURN => ((ct, -st), (ONE, 0)),
+            Angle::HALF_TURN => ((-st, -ct), (0, -ONE)),
+            Angle(THREE_QUARTERS) => ((-ct, st), (-ONE, 0)),
+            _ => (sin_cos(direction), sin_cos(mount.direction)),
+        };
+        // lateral = -forward sin(dir) + right cos(dir), in the car's frame
+        // (exact for quarter turns; the negations saturate).
+        let lateral = match mount.direction {
+            Angle::ZERO => mount.right,
+            Angle::QUARTER_TURN => Length::ZERO.saturating_sub(mount.forward),
+            Angle::HALF_TURN => Length::ZERO.saturating_sub(mount.right),
+            Angle(THREE_QUARTERS) => mount.forward,
+            _ => Length(mul_q30(mount.right.0, cd).saturating_sub(mul_q30(mount.forward.0, sd))),
+        };
+        // Beam origin o = p + lateral (-sin phi, cos phi): the reference
+        // point itself for a mount on its beam's line (both config mounts).
+        let (px, py) = (coord_length(pose.x), coord_length(pose.y));
+        let (ox, oy) = if lateral.0 == 0 {
+            (px, py)
+        } else {
+            (px.saturating_sub(Length(mul_q30(lateral.0, sin))), py.saturating_add(Length(mul_q30(lateral.0, cos))))
+        };
         let (x_wall, ax) = if cos >= 0 { (Wall::North, arena.length_x.saturating_sub(ox)) } else { (Wall::South, ox) };
         let (y_wall, ay) = if sin >= 0 { (Wall::East, arena.width_y.saturating_sub(oy)) } else { (Wall::West, oy) };
         // |sin|, |cos| <= 2^30: the absolute values cannot overflow.
@@ -200,11 +242,14 @@ impl Beam {
     /// the two walls differ by less than `margin`. Division-free:
     /// `|A_x |s| - A_y |c|| < margin |c| |s|`.
     pub fn near_corner(&self, margin: Length) -> bool {
-        let a = i64::from(self.to_wall.0.max(0)) * i64::from(self.other_normal);
-        let b = i64::from(self.other_to_wall.0.max(0)) * i64::from(self.normal);
-        // |a|, |b| < 2^61 and |c s| < 2^30 * 2^30 / 2^30: no overflow.
-        let cs = (i64::from(self.normal) * i64::from(self.other_normal)) >> 30;
-        (a - b).abs() < i64::from(margin.0.max(0)) * cs
+        // In Q14 mm by mul_hi (Q16 * Q30 / 2^32), each within 3 LSB
+        // (2^-12 mm) below the exact product: A >= 0 and |c|, |s| <= 2^30
+        // keep every product in [0, 2^29), their difference in i32.
+        let a = mul_hi(self.to_wall.0.max(0), self.other_normal);
+        let b = mul_hi(self.other_to_wall.0.max(0), self.normal);
+        // |c s| in Q28 (<= 2^28), << 2 -> Q30; margin (Q16) times it -> Q14.
+        let cs = mul_hi(self.normal, self.other_normal) << 2;
+        (a - b).abs() < mul_hi(margin.0.max(0), cs)
     }
 
     /// The expected lidar model output (distance from the reference point

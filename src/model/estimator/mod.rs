@@ -62,10 +62,10 @@ pub mod replay;
 
 use crate::config::estimator as cfg;
 use crate::config::geometry;
-use crate::math::{mul_hi, sin_cos, Angle, Coord, Dt};
+use crate::math::{mul_hi, mul_wide, Angle, Coord, Dt};
 use crate::model::actuator::Motion;
 use crate::model::measurement::{mul_q30, Arena, Beam, Wall};
-use crate::model::state::{step, Pose};
+use crate::model::state::{advance, Pose};
 
 pub use crate::model::measurement::LidarId;
 
@@ -170,11 +170,10 @@ const fn cos_f64(x: f64) -> f64 {
 /// Lidar variance, Q14 mm^2.
 const R_LIDAR: i32 = to_i32(cfg::LIDAR_SIGMA.0 as f64 / 65536.0 * (cfg::LIDAR_SIGMA.0 as f64 / 65536.0) * Q14);
 /// Compass variance in (L rad)^2, Q14 mm^2.
-const R_COMPASS: i64 = crate::math::round_f64(
-    (cfg::COMPASS_SIGMA_DEG * TAU / 360.0 * L) * (cfg::COMPASS_SIGMA_DEG * TAU / 360.0 * L) * Q14,
-);
+const R_COMPASS: i32 =
+    to_i32((cfg::COMPASS_SIGMA_DEG * TAU / 360.0 * L) * (cfg::COMPASS_SIGMA_DEG * TAU / 360.0 * L) * Q14);
 /// gate^2 in Q8.
-const GATE_SQ_Q8: i64 = crate::math::round_f64(cfg::GATE_SIGMAS * cfg::GATE_SIGMAS * 256.0);
+const GATE_SQ_Q8: i32 = to_i32(cfg::GATE_SIGMAS * cfg::GATE_SIGMAS * 256.0);
 /// cos(max incidence), Q30.
 const MIN_NORMAL: i32 = to_i32(cos_f64(cfg::MAX_INCIDENCE_DEG * TAU / 360.0) * 1_073_741_824.0);
 /// Straight: distance variance per mm driven (k^2 Lc), as a factor for
@@ -207,13 +206,22 @@ const P0_HEADING: i32 = {
     let s = cfg::INITIAL_SIGMA_DEG * TAU / 360.0 * L;
     to_i32(s * s * Q14)
 };
-/// Angle LSB per (L rad) mm, Q16: 2^32 / (2 pi L) * 2^16.
-const LSB_PER_TILDE_MM_Q16: i64 = crate::math::round_f64(4_294_967_296.0 / (TAU * L) * 65536.0);
+/// Angle LSB per (L rad) mm, 2^32 / (2 pi L), times 2^9: `mul_hi(K Q21, .)`
+/// then times `nu` (Q16) and `>> 14` gives angle LSB (see `correct`).
+const LSB_PER_TILDE_MM_Q9: i32 = to_i32(4_294_967_296.0 / (TAU * L) * 512.0);
 /// (L rad) mm in Q16 per angle LSB, times 2^32 (for `mul_hi`): 2 pi L 2^16 / 2^32 * 2^32.
 const TILDE_Q16_PER_LSB: i32 = to_i32(TAU * L * 65536.0);
 
 const _: () = {
-    assert!(R_LIDAR > 0 && R_COMPASS > 0 && R_COMPASS < (1 << 40));
+    assert!(R_LIDAR > 0 && R_COMPASS > 0 && R_COMPASS < (1 << 22));
+    assert!(GATE_SQ_Q8 > 0 && GATE_SQ_Q8 < (1 << 12));
+    // lidar R = R_LIDAR cos^2(incidence) >= R_LIDAR MIN_NORMAL^2 >= 2^12 (Q14 mm^2):
+    // S >= R stays positive after `correct`'s scaling by 2^-9
+    assert!((R_LIDAR as i64) * (MIN_NORMAL as i64) / (1 << 30) * (MIN_NORMAL as i64) / (1 << 30) >= (1 << 12));
+    assert!(LSB_PER_TILDE_MM_Q9 > (1 << 30));
+    // D / L < 1/4 (D < 64 mm): a turn's Jacobian entries stay below 1/2,
+    // which `propagate`'s unsaturated products rely on
+    assert!(D_OVER_L_Q31 >= 0 && D_OVER_L_Q31 < (1 << 29));
     assert!(MIN_NORMAL > (1 << 28) && MIN_NORMAL <= (1 << 30));
     assert!(P_MIN > 0 && P_MIN < P_MAX && P_MAX <= (1 << 30));
     assert!(P0_POS <= P_MAX && P0_HEADING <= P_MAX);
@@ -301,56 +309,67 @@ impl Estimator {
 
     /// Moves the pose by `motion` held for `dt` and grows the uncertainty.
     pub fn predict(&mut self, motion: Motion, dt: Dt) {
-        let before = self.pose;
-        self.pose = step(&before, motion, dt);
         let p = &mut self.p;
         match motion {
             Motion::Stop => {}
             Motion::Straight(v) => {
-                let d = v.distance_q24(dt); // |d| < 2^29 (Q24 mm, at most 65.5 mm)
-                let (s, c) = sin_cos(before.theta);
+                // the heading does not change: the pose's cached sin/cos are
+                // those of the step's heading, before and after
+                let (s, c) = self.pose.sin_cos();
+                advance(&mut self.pose, motion, dt);
+                // |d| <= 65.5 mm in Q24 < 2^31 (Speed::MAX over Dt::MAX)
+                let d = v.distance_q24(dt);
                 // F: dx/d(L theta) = -d s / L, dy/d(L theta) = d c / L; in Q30
-                // that is exactly mul_hi(d Q24, s Q30) (2^30 / (2^22 * 256) = 1).
+                // that is exactly mul_hi(d Q24, s Q30) (2^30 / (2^22 * 256) = 1):
+                // |f| <= 65.5 / 256 < 2^-2 (Q30: < 2^28).
                 let f1 = -mul_hi(d, s);
                 let f2 = mul_hi(d, c);
                 propagate(p, f1, f2);
-                // Q: distance noise along (c, s), heading drift.
+                // Q: distance noise along (c, s), heading drift. |d| < 2^31,
+                // K_DIST < 2^21: var_d < 2^20, so every Q30 product below is
+                // far inside i32.
                 let ad = d.saturating_abs();
                 let var_d = mul_hi(ad, K_DIST);
-                let vc = mul_q30(var_d, c);
-                p.xx = p.xx.saturating_add(mul_q30(vc, c));
-                p.xy = p.xy.saturating_add(mul_q30(vc, s));
-                p.yy = p.yy.saturating_add(mul_q30(mul_q30(var_d, s), s));
+                let vc = q30(var_d, c);
+                p.xx = p.xx.saturating_add(q30(vc, c));
+                p.xy = p.xy.saturating_add(q30(vc, s));
+                p.yy = p.yy.saturating_add(q30(q30(var_d, s), s));
                 p.tt = p.tt.saturating_add(mul_hi(ad, K_DRIFT));
             }
             Motion::Turn(_) => {
-                let (s0, c0) = sin_cos(before.theta);
-                let (s1, c1) = sin_cos(self.pose.theta);
+                let before = self.pose.theta;
+                // both cached: the last step's new heading, and this one's
+                // (`advance` stores it)
+                let (s0, c0) = self.pose.sin_cos();
+                advance(&mut self.pose, motion, dt);
+                let (s1, c1) = self.pose.sin_cos();
                 // The turn (model::state): x' = x - D (c0 - c1), y' = y - D (s0 - s1):
                 // dx'/dtheta = D (s0 - s1), dy'/dtheta = D (c1 - c0). Halves
                 // of Q30 values keep the differences in i32 (Q29); D/L Q31
-                // times Q29 gives Q28 from mul_hi, hence the * 4.
-                let f1 = mul_hi(D_OVER_L_Q31, (s0 >> 1) - (s1 >> 1)).saturating_mul(4);
-                let f2 = mul_hi(D_OVER_L_Q31, (c1 >> 1) - (c0 >> 1)).saturating_mul(4);
+                // times Q29 gives Q28 from mul_hi, hence the << 2:
+                // |f| <= 2 D / L < 7/16 (D < 64 mm, asserted): < 2^29 in Q30.
+                let f1 = mul_hi(D_OVER_L_Q31, (s0 >> 1) - (s1 >> 1)) << 2;
+                let f2 = mul_hi(D_OVER_L_Q31, (c1 >> 1) - (c0 >> 1)) << 2;
                 propagate(p, f1, f2);
-                // Q: the turned angle's noise enters through G = (-D s1 / L, D c1 / L, 1).
-                let turned = self.pose.theta.diff(before.theta).saturating_abs();
+                // Q: the turned angle's noise enters through G = (-D s1 / L, D c1 / L, 1)
+                // (|g| < 2^28 in Q30); |turned| <= 2^31, K_TURN < 2^23: vt < 2^22.
+                let turned = self.pose.theta.diff(before).saturating_abs();
                 let vt = mul_hi(turned, K_TURN);
-                let g1 = -mul_hi(D_OVER_L_Q31, s1).saturating_mul(2);
-                let g2 = mul_hi(D_OVER_L_Q31, c1).saturating_mul(2);
-                let (v1, v2) = (mul_q30(vt, g1), mul_q30(vt, g2));
-                p.xx = p.xx.saturating_add(mul_q30(v1, g1));
-                p.xy = p.xy.saturating_add(mul_q30(v1, g2));
-                p.yy = p.yy.saturating_add(mul_q30(v2, g2));
+                let g1 = -(mul_hi(D_OVER_L_Q31, s1) << 1);
+                let g2 = mul_hi(D_OVER_L_Q31, c1) << 1;
+                let (v1, v2) = (q30(vt, g1), q30(vt, g2));
+                p.xx = p.xx.saturating_add(q30(v1, g1));
+                p.xy = p.xy.saturating_add(q30(v1, g2));
+                p.yy = p.yy.saturating_add(q30(v2, g2));
                 p.xt = p.xt.saturating_add(v1);
                 p.yt = p.yt.saturating_add(v2);
                 p.tt = p.tt.saturating_add(vt);
             }
         }
-        // Floors: dt <= 65535 us, the products fit u32 (asserted above).
+        // Floors: dt <= 65535 us, so the products fit u32 (asserted above).
         let dt = dt.as_micros();
-        let fp = (FLOOR_POS.saturating_mul(dt) >> 16) as i32;
-        let fh = (FLOOR_HEADING.saturating_mul(dt) >> 16) as i32;
+        let fp = (FLOOR_POS.wrapping_mul(dt) >> 16) as i32;
+        let fh = (FLOOR_HEADING.wrapping_mul(dt) >> 16) as i32;
         p.xx = p.xx.saturating_add(fp);
         p.yy = p.yy.saturating_add(fp);
         p.tt = p.tt.saturating_add(fh);
@@ -361,23 +380,29 @@ impl Estimator {
     /// reference point along the beam, see [`crate::model::lidar`]).
     pub fn update_lidar(&mut self, which: LidarId, distance: crate::math::Length) -> Update {
         let mount = which.mount();
+        // Refresh the pose's sin/cos cache in place (a no-op when it is
+        // current): the beam takes the heading's sin/cos from it.
+        self.pose.sin_cos();
         let beam = Beam::new(&self.arena, &self.pose, &mount);
         let result = if !beam.square_enough(MIN_NORMAL) || beam.near_corner(cfg::CORNER_MARGIN) {
             Update::Unusable
         } else {
-            // |z| < 2^11 mm keeps H's heading entry below 2^20 (Q16).
+            // |z| < 2^11 mm keeps H's heading entry below 2^19 (Q16).
             let z = crate::math::Length(distance.0.clamp(-(1 << 27), 1 << 27));
             let nu = beam.normal_miss(z);
             let (s, c) = (beam.sin, beam.cos);
             // d(normal_miss)/d(state), see the module docs of `measurement`:
             // x-walls: sign(c) (-1, 0, z s + lat c); y-walls: sign(s) (0, -1, lat s - z c).
+            let lat = |t: i32| if beam.lateral.0 == 0 { 0 } else { mul_q30(beam.lateral.0, t) };
             let (axis, lever, sign_pos) = if beam.wall.is_x_wall() {
-                (0u8, mul_q30(z.0, s).saturating_add(mul_q30(beam.lateral.0, c)), beam.wall == Wall::North)
+                (0u8, mul_q30(z.0, s).saturating_add(lat(c)), beam.wall == Wall::North)
             } else {
-                (1u8, mul_q30(beam.lateral.0, s).saturating_sub(mul_q30(z.0, c)), beam.wall == Wall::East)
+                (1u8, lat(s).saturating_sub(mul_q30(z.0, c)), beam.wall == Wall::East)
             };
-            // lever is mm Q16; / L -> Q16 per (L rad) mm.
-            let theta = lever >> 8;
+            // lever is mm Q16; / L -> Q16 per (L rad) mm; |z| <= 2^27 and a
+            // mount's lateral offset of a few mm keep it near 2^19: clamped
+            // to the bound `correct` relies on.
+            let theta = (lever >> 8).clamp(-THETA_MAX, THETA_MAX);
             // North and East: H = (-1 on the axis, +lever); South and West: (+1, -lever).
             let row = if sign_pos {
                 Row { pos: Some((axis, false)), theta }
@@ -386,7 +411,7 @@ impl Estimator {
             };
             // R = sigma^2 cos^2(incidence): normal^2 in Q30 via mul_hi (Q28) * 4.
             let n2 = mul_hi(beam.normal, beam.normal).saturating_mul(4);
-            let r = i64::from(mul_q30(R_LIDAR, n2)).max(1);
+            let r = mul_q30(R_LIDAR, n2).max(1);
             self.correct(row, nu.0, r)
         };
         let stats = match which {
@@ -408,72 +433,73 @@ impl Estimator {
     }
 
     /// The scalar Kalman correction for innovation `nu` (Q16 mm), row `h`,
-    /// noise `r` (Q14 mm^2, > 0).
-    fn correct(&mut self, h: Row, nu: i32, r: i64) -> Update {
-        let p = self.p;
-        let col = |i: u8| -> [i64; 3] {
-            match i {
-                0 => [p.xx, p.xy, p.xt].map(i64::from),
-                1 => [p.xy, p.yy, p.yt].map(i64::from),
-                _ => [p.xt, p.yt, p.tt].map(i64::from),
-            }
-        };
-        // b = P H^T (Q14): |P_ij| <= 2^30, |theta| < 2^20: each term < 2^34.
-        let ct = col(2);
-        let th = i64::from(h.theta);
-        let mut b = [(ct[0] * th) >> 16, (ct[1] * th) >> 16, (ct[2] * th) >> 16];
-        if let Some((axis, positive)) = h.pos {
-            let cp = col(axis);
-            for (bi, pi) in b.iter_mut().zip(cp) {
-                *bi = if positive { *bi + pi } else { *bi - pi };
-            }
-        }
-        // S = H b + R (Q14): |b| < 2^35, so each term < 2^39.
-        let mut s = (b[2] * th) >> 16;
-        if let Some((axis, positive)) = h.pos {
-            let bp = if axis == 0 { b[0] } else { b[1] };
-            s = if positive { s + bp } else { s - bp };
-        }
-        let s = s.max(0) + r; // H P H^T >= 0 for a valid P; r > 0
-                              // Gate: nu^2 (Q32) >> 18 -> Q14, against gate^2 S; nu^2 < 2^62, S < 2^41.
-        let nu64 = i64::from(nu);
-        if (nu64 * nu64) >> 18 > (s * GATE_SQ_Q8) >> 8 {
+    /// noise `r` (Q14 mm^2, > 0). All 32-bit but the state update's three
+    /// products (see the module docs, "Arithmetic of a correction").
+    fn correct(&mut self, h: Row, nu: i32, r: i32) -> Update {
+        // b = P H^T and H P H^T, scaled by 2^-k (Q(14 - k) mm^2).
+        let (b, hph, k) = project(&self.p, h);
+        // S = H P H^T + R > 0: |hph| < 2^30, r >> k < 2^22, so S < 2^31;
+        // H P H^T >= 0 for a valid P, and r >> k >= 1 keeps S positive.
+        let s = hph.max(0) + (r >> k).max(1);
+        // Gate: nu^2 (Q32) against gate^2 S (S 2^k in Q14 = S 2^(18 + k) in
+        // Q32, gate^2 in Q8): nu^2 <= 2^62; S * 3136 < 2^43, << (10 + k <= 19) < 2^62.
+        if mul_wide(nu, nu) > mul_wide(s, GATE_SQ_Q8) << (10 + k) {
             return Update::Outlier;
         }
-        // The one division: c = 2^44 / S, S >= r >= 1.
-        let c = (1i64 << 44) / s.max(1);
-        // K = b / S in Q16: b c = K 2^44. |K| is bounded by sqrt(P_ii / r)
-        // for a valid P; checked anyway.
-        let mut k = [0i64; 3];
-        for (ki, bi) in k.iter_mut().zip(b) {
-            match bi.checked_mul(c) {
-                Some(v) => *ki = v >> 28,
-                None => {
-                    self.stats.repairs = self.stats.repairs.saturating_add(1);
-                    return Update::Outlier;
-                }
-            }
+        // 1/S = y 2^(ns - 62): S normalised to [2^31, 2^32), its reciprocal
+        // by two Newton steps (no division).
+        let (sn, ns) = normalize(s as u32); // s > 0
+        let y = reciprocal(sn);
+        // b normalised too: beta = b 2^sb with max |beta| in [2^29, 2^30).
+        let mb = b[0].unsigned_abs() | b[1].unsigned_abs() | b[2].unsigned_abs();
+        if mb == 0 {
+            // P H^T = 0: the reading says nothing about the state
+            return Update::Accepted;
         }
-        // State: K nu (Q16 * Q16 = Q32 mm, a Coord's unit).
-        let dx = k[0].saturating_mul(nu64);
-        let dy = k[1].saturating_mul(nu64);
-        let dt = k[2].saturating_mul(nu64) >> 16; // (L rad) mm Q16
-        self.pose.x = Coord(self.pose.x.0.saturating_add(dx));
-        self.pose.y = Coord(self.pose.y.0.saturating_add(dy));
-        let dlsb = dt.saturating_mul(LSB_PER_TILDE_MM_Q16) >> 32;
-        self.pose.theta = self.pose.theta.wrapping_add(Angle(dlsb as u32)); // modulo one turn
-                                                                            // P -= K b^T (upper triangle; K_i b_j = b_i b_j / S, Q16 * Q14 >> 16).
-        let sub = |pij: i32, ki: i64, bj: i64| -> i32 {
-            let v = i64::from(pij) - (ki.saturating_mul(bj) >> 16);
-            v.clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32
-        };
+        // |b| < 2^27: sb >= 3
+        let sb = normalize(mb).1 - 2;
+        // t = beta / S 2^(30 - ns) (|t| < 2^29), rounded toward zero.
+        let t = b.map(|bi| {
+            let m = mul_hi_u(bi.unsigned_abs() << sb, y) as i32;
+            if bi < 0 {
+                -m
+            } else {
+                m
+            }
+        });
+        // K = b / S = t 2^(ns - sb - 30); in Q21: t 2^(ns - sb - 9). For a
+        // valid P, |K_i| <= sqrt(P_ii / S) < 2^8; the largest |t| is at
+        // least 2^27 - 3, so a shift above 2 means |K| >= 2^9: an invalid P.
+        let ek = ns as i32 - sb as i32 - 9;
+        if ek > 2 {
+            self.stats.repairs = self.stats.repairs.saturating_add(1);
+            return Update::Outlier;
+        }
+        // |t| < 2^29, ek <= 2: K fits i32
+        let [kx, ky, kt] = t.map(|ti| shift(ti, ek));
+        // State: K nu, Q21 * Q16 = Q37 mm -> Coord (Q32); |K|, |nu| <= 2^31,
+        // so the exact products are below 2^62.
+        self.pose.x = Coord(self.pose.x.0.saturating_add(mul_wide(kx, nu) >> 5));
+        self.pose.y = Coord(self.pose.y.0.saturating_add(mul_wide(ky, nu) >> 5));
+        // Heading: K_t nu (L rad) mm -> angle LSB: mul_hi(K_t, 2^32 / (2 pi L)
+        // 2^9) nu >> 14; modulo one turn (the low 32 bits).
+        let dlsb = (mul_wide(mul_hi(kt, LSB_PER_TILDE_MM_Q9), nu) >> 14) as u32;
+        self.pose.theta = self.pose.theta.wrapping_add(Angle(dlsb));
+        // P -= K b^T = b b^T / S (upper triangle): b_i b_j / S 2^k in Q14 is
+        // mul_hi(t_i, beta_j) 2^(ns - 2 sb + 2 + k). The diagonal's products
+        // round down (t and beta taken positive, y below 1/S), so less is
+        // removed than exact arithmetic would.
+        let ep = ns as i32 - 2 * sb as i32 + 2 + k as i32;
+        let [bx, by, bt] = b.map(|bi| bi << sb); // |beta| < 2^30
+        let [tx, ty, tt] = t;
         let q = &mut self.p;
-        q.xx = sub(q.xx, k[0], b[0]);
-        q.xy = sub(q.xy, k[0], b[1]);
-        q.xt = sub(q.xt, k[0], b[2]);
-        q.yy = sub(q.yy, k[1], b[1]);
-        q.yt = sub(q.yt, k[1], b[2]);
-        q.tt = sub(q.tt, k[2], b[2]);
+        let diag = |ti: i32, bi: i32| shift(mul_hi(ti.abs(), bi.abs()), ep); // |t| < 2^29, |beta| < 2^30
+        q.xx = q.xx.saturating_sub(diag(tx, bx));
+        q.yy = q.yy.saturating_sub(diag(ty, by));
+        q.tt = q.tt.saturating_sub(diag(tt, bt));
+        q.xy = q.xy.saturating_sub(shift(mul_hi(tx, by), ep));
+        q.xt = q.xt.saturating_sub(shift(mul_hi(tx, bt), ep));
+        q.yt = q.yt.saturating_sub(shift(mul_hi(ty, bt), ep));
         self.condition();
         Update::Accepted
     }
@@ -503,17 +529,180 @@ impl Estimator {
         p.tt = p.tt.max(P_MIN);
         let mut repairs = 0u32;
         for (pij, pii, pjj) in [(&mut p.xy, p.xx, p.yy), (&mut p.xt, p.xx, p.tt), (&mut p.yt, p.yy, p.tt)] {
-            // 0 < pii, pjj <= 2^31: the products fit i64 (and u64).
-            let bound = i64::from(pii) * i64::from(pjj);
-            if i64::from(*pij) * i64::from(*pij) > bound {
-                // The smallest change that restores |P_ij| <= sqrt(P_ii P_jj):
-                // only rounding at a correlation of 1 gets here.
-                let m = isqrt64(bound as u64).min(i32::MAX as u32) as i32;
-                *pij = if *pij < 0 { -m } else { m };
-                repairs += 1;
+            // |P_ij| <= min(P_ii, P_jj) implies P_ij^2 <= P_ii P_jj: the
+            // exact test (two 64-bit products) only past that.
+            let a = pij.unsigned_abs();
+            if a > pii.min(pjj).unsigned_abs() {
+                // 0 < P_ii, P_jj <= 2^30 (capped and floored above); past
+                // max(P_ii, P_jj) it is a violation without a product, so the
+                // exact test sees |P_ij| <= 2^30 too.
+                let bound = mul_u31(pii.unsigned_abs(), pjj.unsigned_abs());
+                if a > pii.max(pjj).unsigned_abs() || mul_u31(a, a) > bound {
+                    // The smallest change that restores |P_ij| <= sqrt(P_ii P_jj):
+                    // only rounding at a correlation of 1 gets here.
+                    let m = isqrt64(bound).min(i32::MAX as u32) as i32;
+                    *pij = if *pij < 0 { -m } else { m };
+                    repairs += 1;
+                }
             }
         }
         self.stats.repairs = self.stats.repairs.saturating_add(repairs);
+    }
+}
+
+/// The exact product of `a, b < 2^31`, from 15-bit halves: `a = ah 2^15 + al`
+/// (`ah < 2^16`, `al < 2^15`), so `ah bh < 2^32`, `ah bl + al bh < 2^32` and
+/// `al bl < 2^30` fit u32. (A split at 16 bits is the textbook pattern LLVM
+/// turns back into a `__muldi3` call when it can prove the operands
+/// non-negative.) About 25 lx106 instructions.
+#[inline(always)]
+fn mul_u31(a: u32, b: u32) -> u64 {
+    let (ah, al) = (a >> 15, a & 0x7FFF);
+    let (bh, bl) = (b >> 15, b & 0x7FFF);
+    let mid = ah * bl + al * bh;
+    (u64::from(ah * bh) << 30) + (u64::from(mid) << 15) + u64::from(al * bl)
+}
+
+/// Bound on H's heading entry (Q16 per (L rad) mm): `|theta| < 2^19`, a
+/// lever of 2048 mm, what `correct`'s 32-bit products are sized for.
+const THETA_MAX: i32 = (1 << 19) - 1;
+
+/// `b = P H^T` and `H P H^T` for row `h`, both scaled by `2^-k` (Q(14 - k)
+/// mm^2), with `k` the smallest shift that brings every covariance entry
+/// the row reads below 2^23 (`k = 0` below 512 mm^2, so steady state is
+/// exact; `k <= 9`). Then `|b| < 2^27` and `|H P H^T| < 2^30`.
+#[inline(always)]
+fn project(p: &Covariance, h: Row) -> ([i32; 3], i32, u32) {
+    let col_t = [p.xt, p.yt, p.tt];
+    let mag = |c: &[i32; 3]| c[0].unsigned_abs() | c[1].unsigned_abs() | c[2].unsigned_abs();
+    match h.pos {
+        None => {
+            // H = (0, 0, 1) (the compass): b = P's heading column, H b = P_tt.
+            let k = scale_shift(mag(&col_t));
+            let b = col_t.map(|v| v >> k);
+            let hb = b[2];
+            (b, hb, k)
+        }
+        Some((axis, positive)) => {
+            // H = (+-1 on `axis`, theta): b = theta P_t + -P_axis.
+            let col_a = if axis == 0 { [p.xx, p.xy, p.xt] } else { [p.xy, p.yy, p.yt] };
+            let k = scale_shift(mag(&col_t) | mag(&col_a));
+            // |P >> k| < 2^23, so << 8 < 2^31; |theta| < 2^19, << 8 < 2^27:
+            // mul_hi gives P theta / 2^16, below 2^26 (+ 3 LSB of rounding).
+            let th8 = h.theta << 8;
+            let mut b = [0i32; 3];
+            for ((bi, ct), ca) in b.iter_mut().zip(col_t).zip(col_a) {
+                let (tp, ap) = (mul_hi((ct >> k) << 8, th8), ca >> k);
+                *bi = if positive { tp + ap } else { tp - ap }; // |b| < 2^26 + 2^23 < 2^27
+            }
+            // H b = +-b_axis + theta b_t / 2^16: b_t << 4 < 2^31, theta << 12
+            // < 2^31, the product below 9 2^26; the sum below 81 2^23 < 2^30.
+            let ba = if axis == 0 { b[0] } else { b[1] };
+            let tb = mul_hi(b[2] << 4, h.theta << 12);
+            let hb = if positive { tb + ba } else { tb - ba };
+            (b, hb, k)
+        }
+    }
+}
+
+/// The shift `k` with `m >> k < 2^23` (0 when `m` already is).
+#[inline(always)]
+fn scale_shift(m: u32) -> u32 {
+    if m < 1 << 23 {
+        0
+    } else {
+        9 - normalize(m).1 // m >= 2^23: normalize's shift is at most 8
+    }
+}
+
+/// `(x << n, n)` with `x << n` in `[2^31, 2^32)`, for `x > 0` (the lx106 has
+/// no NSAU: a five-step binary search, ~15 instructions).
+#[inline(always)]
+fn normalize(x: u32) -> (u32, u32) {
+    let (mut x, mut n) = (x, 0u32);
+    if x < 1 << 16 {
+        x <<= 16;
+        n += 16;
+    }
+    if x < 1 << 24 {
+        x <<= 8;
+        n += 8;
+    }
+    if x < 1 << 28 {
+        x <<= 4;
+        n += 4;
+    }
+    if x < 1 << 30 {
+        x <<= 2;
+        n += 2;
+    }
+    if x < 1 << 31 {
+        x <<= 1;
+        n += 1;
+    }
+    (x, n)
+}
+
+/// Unsigned [`mul_hi`]: `(a * b) >> 32` within 3 LSB below the exact floor
+/// (three 16x16 products; the dropped low product and the two floors only
+/// ever lower it). Never overflows: the sum is at most the exact high word.
+#[inline(always)]
+fn mul_hi_u(a: u32, b: u32) -> u32 {
+    let (ah, al) = (a >> 16, a & 0xFFFF);
+    let (bh, bl) = (b >> 16, b & 0xFFFF);
+    ah * bh + ((ah * bl) >> 16) + ((al * bh) >> 16)
+}
+
+/// Seeds for [`reciprocal`]: `2^23 / (129 + 2 i)`, 2^15 / the middle of
+/// interval `i` of 64 over `[1/2, 1)`; 65028 at most. (Evaluated by the
+/// compiler: an index out of range would be a build error, not a panic.)
+#[allow(clippy::indexing_slicing)]
+const RECIP_SEED: [u16; 64] = {
+    let mut t = [0u16; 64];
+    let mut i = 0;
+    while i < 64 {
+        t[i] = ((1u32 << 23) / (129 + 2 * i as u32)) as u16;
+        i += 1;
+    }
+    t
+};
+
+/// `2^62 / x` for `x` in `[2^31, 2^32)` (a result in `(2^30, 2^31]`), at most
+/// a few 2^-28 below the exact value and never above it: a 64-entry seed
+/// (relative error below 2^-7) and two Newton steps `y += y (1 - x y)`
+/// (2^-14, then 2^-28) in [`mul_hi`] arithmetic. About 50 instructions,
+/// where a 64-bit division is ~430.
+#[inline(always)]
+fn reciprocal(x: u32) -> u32 {
+    // x >> 25 is 64..127: the index is below 64
+    let seed = RECIP_SEED.get(((x >> 25) & 63) as usize).copied().unwrap_or(1 << 15);
+    let mut y = u32::from(seed) << 15; // Q30, (2^30, 2^31)
+    for _ in 0..2 {
+        // x y / 2^32 in Q30 (~2^30); d = (1 - x y) 2^30, |d| < 2^23 after the seed
+        let d = (1u32 << 30).wrapping_sub(mul_hi_u(x, y)) as i32;
+        // y d / 2^30 = mul_hi(y / 2, 8 d): y / 2 < 2^30, |8 d| < 2^26
+        y = y.wrapping_add_signed(mul_hi((y >> 1) as i32, d << 3));
+    }
+    // mul_hi's floors can leave y a few LSB above 1/x: step below it
+    y.saturating_sub(16)
+}
+
+/// `v 2^e`: an arithmetic right shift for `e <= 0`, a saturating left shift
+/// for `e > 0`.
+#[inline(always)]
+fn shift(v: i32, e: i32) -> i32 {
+    if e <= 0 {
+        v >> (-e).min(31)
+    } else {
+        let e = e.min(31) as u32;
+        // fits when |v| < 2^(31 - e)
+        if v.unsigned_abs() < 1u32 << (31 - e) {
+            v << e
+        } else if v < 0 {
+            i32::MIN
+        } else {
+            i32::MAX
+        }
     }
 }
 
@@ -555,16 +744,29 @@ pub fn isqrt64(v: u64) -> u32 {
     root as u32
 }
 
-/// `F P F^T` for `F = I + f1 e_x e_t^T + f2 e_y e_t^T` (f in Q30, |f| < 1).
+/// `a f` for `f` in Q30, where `|a f| < 2^61` (`|f| <= 2^29` for any `a`,
+/// or small operands): `mul_hi` gives Q-2 within 3 LSB below the exact
+/// product, and the `<< 2` cannot overflow under that bound (where
+/// [`mul_q30`] pays for a saturating multiply).
+#[inline(always)]
+fn q30(a: i32, f: i32) -> i32 {
+    mul_hi(a, f) << 2
+}
+
+/// `F P F^T` for `F = I + f1 e_x e_t^T + f2 e_y e_t^T` (f in Q30, |f| < 2^29,
+/// i.e. below 1/2). With `|P_ij| <= 2^30` (conditioned): `u` below 1.5 2^30
+/// fits i32; the other sums can pass 2^31 only for a P near its cap, and
+/// saturate.
+#[inline(always)]
 fn propagate(p: &mut Covariance, f1: i32, f2: i32) {
     // new P_xt = P_xt + f1 P_tt, new P_yt = P_yt + f2 P_tt
-    let u1 = p.xt.saturating_add(mul_q30(p.tt, f1));
-    let u2 = p.yt.saturating_add(mul_q30(p.tt, f2));
+    let u1 = p.xt + q30(p.tt, f1);
+    let u2 = p.yt + q30(p.tt, f2);
     // P_xx + 2 f1 P_xt + f1^2 P_tt = P_xx + f1 (P_xt + u1)
-    p.xx = p.xx.saturating_add(mul_q30(p.xt, f1)).saturating_add(mul_q30(u1, f1));
-    p.yy = p.yy.saturating_add(mul_q30(p.yt, f2)).saturating_add(mul_q30(u2, f2));
+    p.xx = p.xx.saturating_add(q30(p.xt, f1)).saturating_add(q30(u1, f1));
+    p.yy = p.yy.saturating_add(q30(p.yt, f2)).saturating_add(q30(u2, f2));
     // P_xy + f1 P_yt + f2 P_xt + f1 f2 P_tt = P_xy + f1 P_yt + f2 u1
-    p.xy = p.xy.saturating_add(mul_q30(p.yt, f1)).saturating_add(mul_q30(u1, f2));
+    p.xy = p.xy.saturating_add(q30(p.yt, f1)).saturating_add(q30(u1, f2));
     p.xt = u1;
     p.yt = u2;
 }
