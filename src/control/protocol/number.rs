@@ -216,27 +216,39 @@ fn digit_count(v: u32) -> usize {
     }
 }
 
-/// Text written left to right into a byte slice: the formatters' fast path
-/// (a telemetry row is built in one and handed to [`TextOut::put_ascii`] in
-/// one piece). Bytes that do not fit are dropped and remembered.
-pub(super) struct Cursor<'a> {
-    buf: &'a mut [u8],
+/// Capacity of a [`Cursor`], bytes: a power of two, so that masked indexes
+/// need no bounds check.
+pub(super) const CURSOR: usize = 128;
+
+/// Text written left to right into a fixed buffer: the formatters' fast
+/// path (a telemetry row is built in one and handed to
+/// [`TextOut::put_ascii`] in three pieces). A piece that does not fit is
+/// dropped and remembered.
+pub(super) struct Cursor {
+    buf: [u8; CURSOR],
     len: usize,
     overflow: bool,
 }
 
-impl<'a> Cursor<'a> {
-    pub(super) fn new(buf: &'a mut [u8]) -> Cursor<'a> {
-        Cursor { buf, len: 0, overflow: false }
+impl Cursor {
+    pub(super) fn new() -> Cursor {
+        Cursor { buf: [0; CURSOR], len: 0, overflow: false }
+    }
+
+    /// Stores `b` at `i` (masked: always in the buffer).
+    #[inline(always)]
+    fn set(&mut self, i: usize, b: u8) {
+        if let Some(slot) = self.buf.get_mut(i & (CURSOR - 1)) {
+            *slot = b;
+        }
     }
 
     pub(super) fn push(&mut self, b: u8) {
-        match self.buf.get_mut(self.len) {
-            Some(slot) => {
-                *slot = b;
-                self.len = self.len.wrapping_add(1); // < buf.len() before
-            }
-            None => self.overflow = true,
+        if self.len < CURSOR {
+            self.set(self.len, b);
+            self.len = self.len.wrapping_add(1); // < CURSOR before
+        } else {
+            self.overflow = true;
         }
     }
 
@@ -246,38 +258,28 @@ impl<'a> Cursor<'a> {
         }
     }
 
-    /// `magnitude / 10^decimals` as in [`push_fixed_parts`]: the length is
-    /// counted first, then the digits are written from the last, four per
-    /// reciprocal multiply by 10^4 and one per multiply by the reciprocal of
-    /// 10 (no division).
-    pub(super) fn push_fixed(&mut self, negative: bool, magnitude: u32, decimals: u32) {
-        if negative && magnitude != 0 {
-            self.push(b'-');
-        }
+    /// `sep` (unless 0), then `magnitude / 10^decimals` as in
+    /// [`push_fixed_parts`]: the length is counted first, then the text is
+    /// written from its last byte, four digits per reciprocal multiply by
+    /// 10^4 and one per multiply by the reciprocal of 10 (no division).
+    #[inline(never)]
+    pub(super) fn number(&mut self, sep: u8, negative: bool, magnitude: u32, decimals: u32) {
         let decimals = decimals.min(9) as usize;
-        // digits <= 10 (u32::MAX has 10, decimals + 1 <= 10), text <= 11 bytes
+        let minus = negative && magnitude != 0;
+        // digits <= 10 (u32::MAX has 10, decimals + 1 <= 10): text <= 13 bytes
         let digits = digit_count(magnitude).max(decimals.wrapping_add(1));
-        let text_len = digits.wrapping_add(usize::from(decimals > 0));
-        let end = self.len.wrapping_add(text_len); // both small
-        let Some(dst) = self.buf.get_mut(self.len..end) else {
+        let text_len = digits
+            .wrapping_add(usize::from(decimals > 0))
+            .wrapping_add(usize::from(minus))
+            .wrapping_add(usize::from(sep != 0));
+        let end = self.len.wrapping_add(text_len); // both <= CURSOR
+        if end > CURSOR {
             self.overflow = true;
             return;
-        };
-        // index of the point in dst (none without decimals): decimals digits after it
-        let point = if decimals == 0 { usize::MAX } else { text_len.wrapping_sub(decimals).wrapping_sub(1) };
-        let mut p = text_len; // next index written is p - 1
-        let mut put = |d: u32| {
-            p = p.wrapping_sub(1);
-            if p == point {
-                if let Some(slot) = dst.get_mut(p) {
-                    *slot = b'.';
-                }
-                p = p.wrapping_sub(1);
-            }
-            if let Some(slot) = dst.get_mut(p) {
-                *slot = b'0'.wrapping_add(d as u8); // d < 10
-            }
-        };
+        }
+        // the point's index (none without decimals): decimals digits after it
+        let point = if decimals == 0 { usize::MAX } else { end.wrapping_sub(decimals).wrapping_sub(1) };
+        let mut p = end; // the next byte goes to p - 1
         let mut v = magnitude;
         let mut left = digits;
         // whole groups of four while more than four digits are left (at most
@@ -286,7 +288,7 @@ impl<'a> Cursor<'a> {
             let (q, mut r) = div_rem_10k(v);
             for _ in 0..4 {
                 let (q10, d) = div_rem_10_small(r); // r < 10^4
-                put(d);
+                self.digit(&mut p, point, d);
                 r = q10;
             }
             v = q;
@@ -294,28 +296,43 @@ impl<'a> Cursor<'a> {
         }
         for _ in 0..left {
             let (q10, d) = div_rem_10_small(v); // v < 10^4
-            put(d);
+            self.digit(&mut p, point, d);
             v = q10;
+        }
+        if minus {
+            p = p.wrapping_sub(1);
+            self.set(p, b'-');
+        }
+        if sep != 0 {
+            self.set(p.wrapping_sub(1), sep);
         }
         self.len = end;
     }
 
-    /// `sep`, then a signed scaled value (see [`push_fixed_parts`]).
-    pub(super) fn signed(&mut self, v: i32, decimals: u32, sep: u8) {
-        self.push(sep);
-        self.push_fixed(v < 0, v.unsigned_abs(), decimals);
+    /// Writes digit `d` (< 10) in front of `p`, after the point if `p` has
+    /// reached it.
+    #[inline(always)]
+    fn digit(&mut self, p: &mut usize, point: usize, d: u32) {
+        *p = p.wrapping_sub(1);
+        if *p == point {
+            self.set(*p, b'.');
+            *p = p.wrapping_sub(1);
+        }
+        self.set(*p, b'0'.wrapping_add(d as u8)); // d < 10
     }
 
-    /// An unsigned scaled value (see [`push_fixed_parts`]).
-    pub(super) fn unsigned(&mut self, v: u32, decimals: u32) {
-        self.push_fixed(false, v, decimals);
+    /// `sep` (unless 0), then a signed scaled value.
+    #[inline(always)]
+    pub(super) fn signed(&mut self, sep: u8, v: i32, decimals: u32) {
+        self.number(sep, v < 0, v.unsigned_abs(), decimals);
     }
 
     /// A comma, then the value if there is one.
+    #[inline(never)]
     pub(super) fn optional(&mut self, v: Option<i32>, decimals: u32) {
-        self.push(b',');
-        if let Some(v) = v {
-            self.push_fixed(v < 0, v.unsigned_abs(), decimals);
+        match v {
+            Some(v) => self.signed(b',', v, decimals),
+            None => self.push(b','),
         }
     }
 
@@ -351,13 +368,8 @@ pub(super) fn put_number(
     magnitude: u32,
     decimals: u32,
 ) -> Result<(), Overflow> {
-    // prefix, sign, 10 digits and the point: 13 bytes
-    let mut buf = [0u8; 13];
-    let mut text = Cursor::new(&mut buf);
-    if prefix != 0 {
-        text.push(prefix);
-    }
-    text.push_fixed(negative, magnitude, decimals);
+    let mut text = Cursor::new();
+    text.number(prefix, negative, magnitude, decimals);
     text.flush(out)
 }
 

@@ -154,53 +154,47 @@ pub fn format_telemetry(t: &Telemetry, out: &mut dyn TextOut) -> Result<(), Over
     format_row(&TelemetryRow::from(t), out)
 }
 
-/// Appends a row's values as CSV (no terminator). The text is built in a
-/// local buffer, column by column in straight-line code, and appended in
-/// three pieces rather than byte by byte.
+/// Appends a row's values as CSV (no terminator), column by column into a
+/// local buffer that goes out in three pieces rather than byte by byte.
 #[inline(never)]
 pub fn format_row(r: &TelemetryRow, out: &mut dyn TextOut) -> Result<(), Overflow> {
     // Widest columns of any TelemetryRow (not only one from Telemetry):
     // 0..=8 (t_ms 10, x/y 12 each, heading 11, motion 4, v/w 12 each,
     // commands 11 each) 103 bytes with their commas, 9..=19 (raw 5, distance
     // 12, twice; mag 6 x 3, field 11 x 3, compass 11) 107 with the comma in
-    // front, 20..=25 (counters 10 x 6) 66: each piece fits the buffer.
-    let mut buf = [0u8; 112];
-    let mut row = Cursor::new(&mut buf);
+    // front, 20..=25 (counters 10 x 6) 66: each piece fits a Cursor.
+    let mut row = Cursor::new();
     let f = &r.faults;
-    row.unsigned(r.t_ms, 0);
-    row.signed(r.x_dmm, 1, b',');
-    row.signed(r.y_dmm, 1, b',');
-    row.push(b',');
-    row.unsigned(r.heading_mdeg, 3);
+    row.number(0, false, r.t_ms, 0);
+    row.signed(b',', r.x_dmm, 1);
+    row.signed(b',', r.y_dmm, 1);
+    row.number(b',', false, r.heading_mdeg, 3);
     row.push(b',');
     row.push_bytes(motion_word(r.motion).as_bytes());
-    row.signed(r.v_mm_s, 3, b',');
-    row.signed(r.w_mrad_s, 3, b',');
-    row.push(b',');
-    row.unsigned(r.left_cmd_centi, 2);
-    row.push(b',');
-    row.unsigned(r.right_cmd_centi, 2);
+    row.signed(b',', r.v_mm_s, 3);
+    row.signed(b',', r.w_mrad_s, 3);
+    row.number(b',', false, r.left_cmd_centi, 2);
+    row.number(b',', false, r.right_cmd_centi, 2);
     row.flush(out)?;
     row.clear();
     row.optional(r.front_raw_mm.map(i32::from), 0);
     row.optional(r.front_dmm, 1);
     row.optional(r.right_raw_mm.map(i32::from), 0);
     row.optional(r.right_dmm, 1);
-    for k in 0..3 {
-        row.optional(r.mag_raw.and_then(|m| m.get(k).copied()).map(i32::from), 0);
+    let raw = r.mag_raw.map(|m| m.map(i32::from));
+    for group in [raw, r.mag_field] {
+        for k in 0..3 {
+            row.optional(group.and_then(|m| m.get(k).copied()), 0);
+        }
     }
-    for k in 0..3 {
-        row.optional(r.mag_field.and_then(|m| m.get(k).copied()), 0);
-    }
-    row.push(b',');
-    if let Some(d) = r.compass_mdeg {
-        row.unsigned(d, 3);
+    match r.compass_mdeg {
+        Some(d) => row.number(b',', false, d, 3),
+        None => row.push(b','),
     }
     row.flush(out)?;
     row.clear();
     for count in [f.bus, f.timeout, f.missing, f.bad_sample, f.rejected_outliers, f.overruns] {
-        row.push(b',');
-        row.unsigned(count, 0);
+        row.number(b',', false, count, 0);
     }
     row.flush(out)
 }
