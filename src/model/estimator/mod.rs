@@ -7,7 +7,7 @@
 //!   [`Angle`]); the covariance is over the error `(dx, dy, L dtheta)` with
 //!   `L` = 256 mm, so all three components are in mm and one Q format fits
 //!   them all ([`Covariance`]: six `i32`, Q14 mm^2, symmetric by storage).
-//! - Predict: the pose moves by [`step`] (the report's equations, including
+//! - Predict: the pose moves by [`advance`] (the report's equations, including
 //!   its turn case); the covariance by `F P F^T + Q`, with `F` the Jacobian
 //!   of those same equations. `Q` models the lab's speed spread as a random
 //!   walk per distance driven (or angle turned) whose variance over one
@@ -40,20 +40,53 @@
 //!   [`EstimatorStats::repairs`]. The per-second noise floors (config) keep
 //!   `P` a margin away from singular; the long-run test checks that `P`
 //!   stays positive definite (f64 Cholesky, every tick) for hours.
-//! - One division per correction: `c = 2^44 / S`, with `S >= R > 0` (the
+//! - No division at all: a correction needs `1/S` with `S >= R > 0` (the
 //!   measurement noise is a positive constant times a squared cosine that is
-//!   at least the incidence limit's). Predict has none.
+//!   at least the incidence limit's; the scaling below keeps `S >= 1` LSB),
+//!   computed as a reciprocal by Newton's method and kept just below the
+//!   exact value. A gain of 2^9 or more (impossible for a valid `P`) is not
+//!   applied: counted in `repairs`, the reading reported as an outlier.
 //!
-//! # Cost (lx106, no 32x32->64 multiply)
-//! Predict: [`step`] (one [`sin_cos`] going straight, two turning), one or
-//! two more `sin_cos` for the Jacobian and noise, and about 16 [`mul_hi`]
-//! (~10 instructions each); no 64-bit multiply, no division.
-//! A correction: 19 64-bit multiplies (~40 instructions each, all of
-//! operands proven to fit, see the comments) and the one 64-bit division;
-//! a lidar adds its [`Beam`] (two `sin_cos`, ~10 `mul_hi`, 3 64-bit
-//! multiplies for the corner test). Estimated: predict under 1000
-//! instructions, a correction 1500-2500 depending on the division routine;
-//! the lx106 counts are the lead's benchmark's to confirm.
+//! # Arithmetic of a correction (32-bit but three products)
+//! - Scale: the covariance entries the row reads are shifted right by `k`
+//!   so that they are below 2^23 (`k = 0` below 512 mm^2: steady state is
+//!   exact). Then `b = P H^T` (`mul_hi`, `|b| < 2^27`) and `S = H b + R`
+//!   (`< 2^31`) are i32 in Q(14 - k).
+//! - Gate: `nu^2` against `gate^2 S` as exact 64-bit products ([`mul_wide`]).
+//! - `S` is normalised to `[2^31, 2^32)` (a 5-step binary search: the lx106
+//!   has no NSAU) and its reciprocal `y` comes from a 64-entry seed table and
+//!   two Newton steps (error below 2^-26); `b` is normalised to `beta` with
+//!   a common shift.
+//! - `t_i = mul_hi(|beta_i|, y)` (signed, rounded toward zero) gives both the
+//!   gain `K = b / S` (Q21, by a shift) and the covariance update
+//!   `b_i b_j / S = mul_hi(t_i, beta_j)` shifted back: relative precision
+//!   about 2^-24 of the largest term, where the former `2^44 / S` gain lost
+//!   precision as `S` grew.
+//! - The state update `K nu` is exact ([`mul_wide`], Q37 -> Coord); the
+//!   heading's goes through one `mul_hi` to angle LSB (modulo a turn).
+//!
+//! # Cost (lx106: no 32x32->64 multiply, no divide)
+//! Measured by `lx106/run.sh` (ICOUNT under QEMU, worst of 8 poses, 10 ms
+//! step; was before this arithmetic in parentheses):
+//!
+//! | call | instructions |
+//! | --- | ---: |
+//! | predict Stop | 169 (626) |
+//! | predict Straight | 689 (1221) |
+//! | predict Turn | 720 (1284) |
+//! | update_lidar (accepted, incl. its [`Beam`]) | 1362 (5368) |
+//! | update_heading (accepted) | 837 (4527) |
+//!
+//! Predict: [`advance`] on the pose in place (no `sin_cos` going straight,
+//! one turning, both from the pose's cache), the Jacobian and noise from
+//! the cached sin/cos of the old and new heading, about 17 [`mul_hi`] (~11
+//! instructions each, the Q30 products unsaturated where `|f| < 1/2` bounds
+//! them); no 64-bit multiply, no division. A correction: about 20 `mul_hi`,
+//! 5 [`mul_wide`] (~25 instructions each), no runtime helper call; a lidar
+//! adds its [`Beam`] (the cached sin/cos turned by the mount's quarter
+//! turn, 6 `mul_hi` with the corner test). Every step ends with the
+//! conditioning (~80 instructions; an exact `P_ij^2 <= P_ii P_jj` test from
+//! 15-bit partial products only when `|P_ij| > min(P_ii, P_jj)`).
 
 // host only (std): replays CSV rows whose width is checked first
 #[cfg(feature = "std")]
@@ -236,7 +269,7 @@ const _: () = {
 struct Row {
     /// 0 = x, 1 = y, with the sign of the unit entry; `None` for the compass.
     pos: Option<(u8, bool)>,
-    /// Q16; |theta| < 2^20 (at most (|z| + |lateral|) / L with |z| < 2^11 mm).
+    /// Q16; |theta| <= THETA_MAX < 2^19 ((|z| + |lateral|) / L with |z| <= 2^11 mm, clamped).
     theta: i32,
 }
 
