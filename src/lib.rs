@@ -34,11 +34,6 @@
 #[cfg(feature = "std")]
 extern crate std;
 
-// TODO(board helper): arithmetic and indexing in board/ (uart divisor
-// maths, servo edge planning, the host bit-bang wire model) are to be made
-// checked or given local allows with their bounds; until then the board
-// layer allows these two lints.
-#[allow(clippy::arithmetic_side_effects, clippy::indexing_slicing)]
 pub mod board;
 pub mod config;
 pub mod control;

@@ -11,6 +11,21 @@
 //! the compass; then [`run`]: the control loop at `config::timing::LOOP_HZ`
 //! fed by UART0, the watchdog fed every pass, the LED blinking the state.
 #![cfg_attr(target_arch = "xtensa", no_std, no_main)]
+// The same panic lints as the library (src/lib.rs, issue 8): errors in the
+// firmware build; the host stub has nothing they could catch.
+#![cfg_attr(
+    not(test),
+    deny(
+        clippy::unwrap_used,
+        clippy::expect_used,
+        clippy::panic,
+        clippy::indexing_slicing,
+        clippy::unreachable,
+        clippy::todo,
+        clippy::unimplemented,
+        clippy::arithmetic_side_effects
+    )
+)]
 
 #[cfg(not(target_arch = "xtensa"))]
 fn main() {
@@ -27,7 +42,7 @@ mod robot {
     use esp8266_hal::entry;
     use esp8266_hal::uart::UART0Serial;
 
-    use paperbot::board::esp8266::{start_watchdog, Board, I2cBus, MicrosClock};
+    use paperbot::board::esp8266::{halt, start_watchdog, Board, I2cBus, MicrosClock};
     use paperbot::config;
     use paperbot::control::tick::{Controller, LineSink, TICK_US};
     use paperbot::driver::bus::SharedI2c;
@@ -52,8 +67,8 @@ mod robot {
     #[entry]
     fn main() -> ! {
         let Some(board) = Board::take() else {
-            // Only reachable if main ran twice; nothing sensible to do.
-            panic!("peripherals already taken");
+            // Only reachable if main ran twice: stop and reset.
+            halt(format_args!("peripherals already taken"));
         };
         run(board)
     }

@@ -93,9 +93,11 @@ pub struct Timing {
     pub stretch_timeout: u32,
 }
 
-const fn ns_to_cycles(ns: u32, cpu_hz: u32) -> u32 {
-    // ceil(ns * cpu_hz / 1e9) in u64: < 2^32 * 2^32, no overflow.
-    let c = (ns as u64 * cpu_hz as u64).div_ceil(1_000_000_000);
+/// `ns` nanoseconds in cycles of a `cpu_hz` clock, rounded up, saturating at
+/// `u32::MAX` (shared with the board's CCOUNT delay).
+pub(crate) const fn ns_to_cycles(ns: u32, cpu_hz: u32) -> u32 {
+    // ceil(ns * cpu_hz / 1e9) in u64: < 2^32 * 2^32, exact, never saturates.
+    let c = (ns as u64).saturating_mul(cpu_hz as u64).div_ceil(1_000_000_000);
     if c > u32::MAX as u64 {
         u32::MAX
     } else {
@@ -367,25 +369,28 @@ impl<P: I2cPins, C: CycleClock> BitBangI2c<P, C> {
         if address > 0x7F {
             return Err(Error::InvalidAddress);
         }
-        let n = operations.len();
-        let mut idx = 0;
-        while idx < n {
+        let any = !operations.is_empty();
+        let mut first = true;
+        let mut rest: &mut [Operation<'_>] = operations;
+        while let Some(head) = rest.first() {
             // A group: the longest run of operations of the same direction,
             // sent under one address (embedded-hal 1.0 transaction contract).
-            let is_read = matches!(operations.get(idx), Some(Operation::Read(_)));
-            let mut end = idx;
-            while end < n && matches!(operations.get(end), Some(Operation::Read(_))) == is_read {
-                end += 1;
-            }
-            if idx == 0 {
+            let is_read = matches!(head, Operation::Read(_));
+            let len = rest.iter().position(|op| matches!(op, Operation::Read(_)) != is_read).unwrap_or(rest.len());
+            // len <= rest.len(): the split always succeeds.
+            let Some((group, tail)) = core::mem::take(&mut rest).split_at_mut_checked(len) else {
+                break;
+            };
+            rest = tail;
+            if first {
                 self.start()?;
             } else {
                 self.repeated_start()?;
             }
+            first = false;
             if !self.write_byte(address << 1 | u8::from(is_read))? {
                 return Err(Error::NoAcknowledge(NoAcknowledgeSource::Address));
             }
-            let group = operations.get_mut(idx..end).unwrap_or_default();
             if is_read {
                 let total: usize = group.iter().map(|op| if let Operation::Read(b) = op { b.len() } else { 0 }).sum();
                 if total == 0 {
@@ -413,9 +418,8 @@ impl<P: I2cPins, C: CycleClock> BitBangI2c<P, C> {
                     }
                 }
             }
-            idx = end;
         }
-        if n > 0 {
+        if any {
             self.stop()?;
         }
         Ok(())

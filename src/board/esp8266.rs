@@ -11,8 +11,8 @@
 //!   (esp8266-hal has no baud API); frame format is the ROM's 8N1.
 //! - Watchdog: the hardware WDT, [`config::board::WATCHDOG_MS`].
 //! - LED on GPIO16 (active low on the NodeMCU), XSHUT on GPIO0 / GPIO2.
-//! - The panic handler: servo pulses off first, then the message on UART0,
-//!   then a watchdog reset.
+//! - [`halt`] and the panic handler: servo pulses off first, then the
+//!   message on UART0, then a watchdog reset.
 
 use core::cell::UnsafeCell;
 use core::convert::Infallible;
@@ -26,7 +26,7 @@ use esp8266_hal::time::Milliseconds;
 use esp8266_hal::uart::UART0Serial;
 use esp8266_hal::watchdog::{StageTimeout, Watchdog};
 
-use super::bitbang_i2c::{BitBangI2c, CycleClock, I2cPins, Timing};
+use super::bitbang_i2c::{ns_to_cycles, BitBangI2c, CycleClock, I2cPins, Timing};
 use super::servo_pulse::{Channel, PulseMailbox, PulseScheduler, PulseTimer, ServoPulses};
 use super::uart::UART0_DIVIDER;
 use crate::config;
@@ -93,9 +93,9 @@ pub struct CcountDelay;
 
 impl embedded_hal::delay::DelayNs for CcountDelay {
     fn delay_ns(&mut self, ns: u32) {
-        // ns * 80 / 1e9 in u64: at most 4.3e9 * 8e7, no overflow; the
-        // result (<= 343e6 cycles) fits a u32.
-        let cycles = (u64::from(ns) * u64::from(config::board::CPU_HZ)).div_ceil(1_000_000_000) as u32;
+        // ceil(ns * 80 / 1000): at most 343.6e6 cycles (< 4.3 s of CCOUNT,
+        // well inside one wrap), never saturates for the 80 MHz core.
+        let cycles = ns_to_cycles(ns, config::board::CPU_HZ);
         let start = xtensa_lx::timer::get_cycle_count();
         while xtensa_lx::timer::get_cycle_count().wrapping_sub(start) < cycles {}
     }
@@ -363,16 +363,16 @@ pub fn start_watchdog(watchdog: &mut Watchdog) {
     watchdog.start(Milliseconds(config::board::WATCHDOG_MS));
 }
 
-// ---- panic ----------------------------------------------------------------
+// ---- halt and panic --------------------------------------------------------
 
-/// UART0 written straight through the FIFO register, for the panic handler
-/// (the `UART0Serial` may be borrowed by the interrupted code).
-struct PanicUart;
+/// UART0 written straight through the FIFO register, for [`halt`] (the
+/// `UART0Serial` may be borrowed by the interrupted code).
+struct HaltUart;
 
-impl core::fmt::Write for PanicUart {
+impl core::fmt::Write for HaltUart {
     fn write_str(&mut self, s: &str) -> core::fmt::Result {
-        // SAFETY: the panicking code will never run again; we only append
-        // bytes to the TX FIFO.
+        // SAFETY: the code that owned UART0 will never run again; we only
+        // append bytes to the TX FIFO.
         let uart = unsafe { &*pac::UART0::ptr() };
         for &b in s.as_bytes() {
             // bounded wait for FIFO room (128 bytes; ~11 ms to drain at 115200)
@@ -389,18 +389,26 @@ impl core::fmt::Write for PanicUart {
     }
 }
 
-#[panic_handler]
-fn panic(info: &core::panic::PanicInfo) -> ! {
+/// Stops the robot for good, without panicking: servo pulses off first,
+/// then `why` on UART0 (`!` line), then a watchdog reset. For what the
+/// firmware cannot go on from: the panic handler, a failed bring-up.
+pub fn halt(why: core::fmt::Arguments<'_>) -> ! {
     // 1. wheels first
     stop_servo_pulses();
     // 2. say why
-    let _ = write!(PanicUart, "\r\n!panic {}\r\n", info);
+    let _ = write!(HaltUart, "\r\n!{}\r\n", why);
     // 3. reset: arm the watchdog at its shortest stages and never feed it
-    // SAFETY: nothing else runs any more.
+    // SAFETY: nothing else runs any more (the servo interrupt is masked and
+    // the caller never gets control back).
     let dp = unsafe { Peripherals::steal() };
     let mut wdt = dp.WDT.watchdog();
     wdt.start((StageTimeout::Stage084Sec, StageTimeout::Stage084Sec));
     loop {
         core::hint::spin_loop();
     }
+}
+
+#[panic_handler]
+fn panic(info: &core::panic::PanicInfo) -> ! {
+    halt(format_args!("panic {}", info))
 }

@@ -19,7 +19,9 @@ pub mod bitbang_i2c;
 pub mod servo_pulse;
 pub mod uart;
 
+// Host-only test support (a simulated wire for the tests), never on the robot.
 #[cfg(any(test, feature = "sim"))]
+#[allow(clippy::arithmetic_side_effects, clippy::indexing_slicing)]
 pub mod sim_wire;
 
 #[cfg(all(target_arch = "xtensa", feature = "board"))]

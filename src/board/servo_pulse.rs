@@ -58,6 +58,8 @@ pub const CYCLES_PER_TICK: u32 = config::board::CPU_HZ / (config::board::APB_HZ 
 pub const FRC1_MAX: u32 = (1 << 23) - 1;
 /// The alarm comes this many cycles before its edge.
 pub const GUARD_CYCLES: u32 = config::board::SERVO_EDGE_GUARD_US * CYCLES_PER_US;
+/// The longest pulse, cycles.
+pub const MAX_WIDTH_CYCLES: u32 = config::servo::SAFE_MAX_US * CYCLES_PER_US;
 /// One frame, cycles.
 pub const FRAME_CYCLES: u32 = config::servo::FRAME_US * CYCLES_PER_US;
 /// Rising edge of the right pulse after the left one, cycles.
@@ -124,10 +126,11 @@ impl PulseWidthUs {
         self.0 == 0
     }
 
-    /// The width in CPU cycles after clamping (0 for OFF). At most
-    /// SAFE_MAX_US * 80, no overflow.
+    /// The width in CPU cycles after clamping (0 for OFF), at most
+    /// [`MAX_WIDTH_CYCLES`].
     pub const fn cycles(self) -> u32 {
-        Self::safe(self.0 as u32).0 as u32 * CYCLES_PER_US
+        // <= SAFE_MAX_US * 80 (asserted to fit above): exact, never saturates.
+        (Self::safe(self.0 as u32).0 as u32).saturating_mul(CYCLES_PER_US)
     }
 }
 
@@ -238,18 +241,26 @@ impl FramePlan {
     /// The edge of `phase`. An OFF channel gets its "fall" at the shortest
     /// width with both edges low, so the frame keeps its shape.
     /// Intervals: each >= SAFE_MIN_US or >= STAGGER - SAFE_MAX, and they sum
-    /// to FRAME_CYCLES (no underflow: the config asserts above).
+    /// to FRAME_CYCLES.
     pub const fn edge(&self, phase: Phase) -> PlannedEdge {
         const MIN: u32 = config::servo::SAFE_MIN_US * CYCLES_PER_US;
+        // Both widths come from `PulseWidthUs::cycles` (or are 0), so
+        // l, r <= MAX_WIDTH_CYCLES; the config asserts STAGGER >= SAFE_MAX +
+        // guard and FRAME >= STAGGER + SAFE_MAX + guard, so the subtractions
+        // below are exact and never saturate.
         let l = if self.left == 0 { MIN } else { self.left };
         let r = if self.right == 0 { MIN } else { self.right };
         match phase {
             Phase::LeftRise => PlannedEdge { channel: Channel::Left, high: self.left != 0, interval: l },
-            Phase::LeftFall => PlannedEdge { channel: Channel::Left, high: false, interval: STAGGER_CYCLES - l },
-            Phase::RightRise => PlannedEdge { channel: Channel::Right, high: self.right != 0, interval: r },
-            Phase::RightFall => {
-                PlannedEdge { channel: Channel::Right, high: false, interval: FRAME_CYCLES - STAGGER_CYCLES - r }
+            Phase::LeftFall => {
+                PlannedEdge { channel: Channel::Left, high: false, interval: STAGGER_CYCLES.saturating_sub(l) }
             }
+            Phase::RightRise => PlannedEdge { channel: Channel::Right, high: self.right != 0, interval: r },
+            Phase::RightFall => PlannedEdge {
+                channel: Channel::Right,
+                high: false,
+                interval: (FRAME_CYCLES - STAGGER_CYCLES).saturating_sub(r),
+            },
         }
     }
 }

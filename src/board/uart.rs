@@ -15,14 +15,18 @@ pub const CLKDIV_MAX: u32 = (1 << 20) - 1;
 /// `None` if `baud` is 0, above the clock, or needs a divider wider than
 /// [`CLKDIV_MAX`].
 pub const fn divider(clk_hz: u32, baud: u32) -> Option<u32> {
-    if baud == 0 || baud > clk_hz {
+    if baud > clk_hz {
         return None;
     }
     // clk_hz / baud + (remainder >= baud / 2) avoids the clk + baud/2 overflow.
-    let q = clk_hz / baud;
-    let r = clk_hz % baud;
-    // r < baud, so r * 2 fits in u64 trivially; do it in u64 for baud > 2^31.
-    let d = if (r as u64) * 2 >= baud as u64 { q + 1 } else { q };
+    let (Some(q), Some(r)) = (clk_hz.checked_div(baud), clk_hz.checked_rem(baud)) else {
+        return None; // baud == 0
+    };
+    // Round half up: 2r >= baud, i.e. r >= baud - r (exact: r < baud).
+    let half_up = r >= baud.saturating_sub(r);
+    // q + 1 only saturates for baud == 1 and clk_hz == u32::MAX, where r == 0
+    // and half_up is false; a saturated divider would be refused below anyway.
+    let d = if half_up { q.saturating_add(1) } else { q };
     if d == 0 || d > CLKDIV_MAX {
         None
     } else {
@@ -30,23 +34,44 @@ pub const fn divider(clk_hz: u32, baud: u32) -> Option<u32> {
     }
 }
 
-/// The baud rate a divider really produces, rounded to the nearest Hz.
+/// The baud rate a divider really produces, rounded to the nearest Hz (0 for
+/// a 0 divider).
 pub const fn actual_baud(clk_hz: u32, divider: u32) -> u32 {
-    if divider == 0 {
-        return 0;
+    // clk_hz + divider / 2 < 2^33: exact in u64, the saturation never bites.
+    let num = (clk_hz as u64).saturating_add(divider as u64 / 2);
+    match num.checked_div(divider as u64) {
+        // divider >= 1: the quotient is at most clk_hz, so it fits a u32.
+        Some(baud) => baud as u32,
+        None => 0,
     }
-    ((clk_hz as u64 + divider as u64 / 2) / divider as u64) as u32
 }
 
+/// Parts per million in one.
+const PPM: i64 = 1_000_000;
+
 /// Baud rate error of `divider` against the wanted `baud`, in parts per
-/// million (positive: the UART runs fast). `i64` cannot overflow here: the
-/// numerator is below 2^32 * 10^6 < 2^52.
+/// million (positive: the UART runs fast). `i64::MAX` for a 0 `baud` or
+/// `divider`; an error too negative for an `i64` (a divider billions of
+/// times too large) saturates at `-i64::MAX`, so `abs()` stays defined.
 pub const fn error_ppm(clk_hz: u32, baud: u32, divider: u32) -> i64 {
     if divider == 0 || baud == 0 {
         return i64::MAX;
     }
-    let wanted = baud as i64 * divider as i64;
-    (clk_hz as i64 - wanted) * 1_000_000 / wanted
+    // baud * divider < 2^64 may pass i64::MAX: then the UART is hopelessly slow.
+    let Some(wanted) = (baud as i64).checked_mul(divider as i64) else {
+        return -i64::MAX;
+    };
+    // 0 <= clk_hz < 2^32 and 0 < wanted <= i64::MAX: the difference is exact.
+    let diff = (clk_hz as i64).saturating_sub(wanted);
+    // Positive side: diff < 2^32, diff * 10^6 < 2^52. Negative side may overflow.
+    let Some(num) = diff.checked_mul(PPM) else {
+        return -i64::MAX;
+    };
+    // wanted > 0: never None (and never i64::MIN / -1).
+    match num.checked_div(wanted) {
+        Some(e) => e,
+        None => i64::MAX,
+    }
 }
 
 /// `UART_CLKDIV` for UART0 at [`config::serial::BAUD`].
@@ -113,5 +138,26 @@ mod tests {
         assert_eq!(divider(80_000_000, 76), None);
         assert_eq!(divider(80_000_000, 77), Some(1_038_961));
         assert_eq!(divider(u32::MAX, u32::MAX), Some(1));
+        // q + 1 would overflow were r >= baud / 2; with baud 1 it never is.
+        assert_eq!(divider(u32::MAX, 1), None);
+        assert_eq!(divider(2 * CLKDIV_MAX + 1, 2), None);
+        assert_eq!(divider(2 * CLKDIV_MAX - 1, 2), Some(CLKDIV_MAX));
+    }
+
+    #[test]
+    fn extreme_arguments_give_defined_answers() {
+        assert_eq!(actual_baud(80_000_000, 0), 0);
+        assert_eq!(actual_baud(u32::MAX, 1), u32::MAX);
+        assert_eq!(actual_baud(u32::MAX, u32::MAX), 1);
+        assert_eq!(error_ppm(80_000_000, 0, 694), i64::MAX);
+        assert_eq!(error_ppm(80_000_000, 115_200, 0), i64::MAX);
+        // the UART at twice the wanted rate, and at half of it
+        assert_eq!(error_ppm(80_000_000, 100, 400_000), 1_000_000);
+        assert_eq!(error_ppm(80_000_000, 100, 1_600_000), -500_000);
+        // baud * divider past i64::MAX, and diff * 10^6 past i64::MIN
+        assert_eq!(error_ppm(1, u32::MAX, u32::MAX), -i64::MAX);
+        assert_eq!(error_ppm(1, 1 << 31, 1 << 20), -i64::MAX);
+        // near the limit but inside: (1 - 2^42) * 10^6 / 2^42, truncated toward 0
+        assert_eq!(error_ppm(1, 1 << 21, 1 << 21), -999_999);
     }
 }
