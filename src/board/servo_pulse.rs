@@ -107,6 +107,7 @@ impl PulseWidthUs {
 
     /// `us` clamped to the servo's safe window ([`config::servo::SAFE_MIN_US`]
     /// ..= [`config::servo::SAFE_MAX_US`]); 0 stays [`Self::OFF`].
+    #[inline(always)]
     pub const fn safe(us: u32) -> Self {
         if us == 0 {
             return Self::OFF;
@@ -128,6 +129,7 @@ impl PulseWidthUs {
 
     /// The width in CPU cycles after clamping (0 for OFF), at most
     /// [`MAX_WIDTH_CYCLES`].
+    #[inline(always)]
     pub const fn cycles(self) -> u32 {
         // <= SAFE_MAX_US * 80 (asserted to fit above): exact, never saturates.
         (Self::safe(self.0 as u32).0 as u32).saturating_mul(CYCLES_PER_US)
@@ -207,6 +209,7 @@ pub enum Phase {
 }
 
 impl Phase {
+    #[inline(always)]
     const fn next(self) -> Self {
         match self {
             Phase::LeftRise => Phase::LeftFall,
@@ -234,6 +237,7 @@ pub struct FramePlan {
 }
 
 impl FramePlan {
+    #[inline(always)]
     pub const fn new(left: PulseWidthUs, right: PulseWidthUs) -> Self {
         Self { left: left.cycles(), right: right.cycles() }
     }
@@ -242,6 +246,7 @@ impl FramePlan {
     /// width with both edges low, so the frame keeps its shape.
     /// Intervals: each >= SAFE_MIN_US or >= STAGGER - SAFE_MAX, and they sum
     /// to FRAME_CYCLES.
+    #[inline(always)]
     pub const fn edge(&self, phase: Phase) -> PlannedEdge {
         const MIN: u32 = config::servo::SAFE_MIN_US * CYCLES_PER_US;
         // Both widths come from `PulseWidthUs::cycles` (or are 0), so
@@ -303,7 +308,8 @@ impl PulseScheduler {
     }
 
     /// The FRC1 interrupt: makes the due edge at its exact cycle and arms the
-    /// alarm for the next one. Inlined so the whole handler sits in IRAM.
+    /// alarm for the next one. Inlined, with everything it calls, so the
+    /// whole handler sits in IRAM (`#[ram]` places only the handler itself).
     #[inline(always)]
     pub fn on_alarm<T: PulseTimer>(&mut self, hw: &mut T, mailbox: &PulseMailbox) {
         if self.phase == Phase::LeftRise {
