@@ -235,6 +235,15 @@ pub mod i2c {
     /// Clock pulses sent to free a slave that holds SDA low (UM10204 3.1.16:
     /// nine clocks, then STOP).
     pub const RECOVERY_CLOCKS: u8 = 9;
+    /// Times a failed transaction is run again before the driver sees the
+    /// error (`driver::bus::Retry`), count. Source: the fault runs
+    /// (tests/faults_long.rs): a lidar bring-up is ~110 transactions, so
+    /// without retries it got through a bus with 1 % faulty transactions
+    /// about one try in three; with 2 retries a transaction fails only when
+    /// three attempts in a row do (1e-6 at 1 %, 4e-4 at 10 % of which 3/4
+    /// fail loudly), so a bring-up gets through a 10 % bus ~19 times in 20.
+    /// Each retry costs one transaction (~0.1 ms at 400 kHz).
+    pub const TRANSACTION_RETRIES: u8 = 2;
 }
 
 /// Timing of the control loop.
@@ -256,6 +265,13 @@ pub mod timing {
     /// Bus errors in a row before a sensor is taken down: one glitch (e.g.
     /// a servo's current surge on the bus) only costs that sample.
     pub const SENSOR_MAX_BUS_ERRORS: u8 = 3;
+    /// Estimator corrections per tick at most (each ~1,350 lx106
+    /// instructions, lx106/BENCHMARKS.md). Readings that arrive together wait
+    /// a tick, lidars first (a 10 ms wait at 0.15 m/s is 1.5 mm, within the
+    /// lidar's 1.6 mm spread), the compass when no lidar reading waits; this
+    /// keeps a tick within its 3,000-instruction budget. 3 applies every
+    /// reading in the tick it arrives.
+    pub const MAX_CORRECTIONS_PER_TICK: u8 = 1;
 }
 
 /// Serial port.

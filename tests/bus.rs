@@ -8,7 +8,8 @@ use embedded_hal::i2c::{ErrorKind, I2c, NoAcknowledgeSource};
 use embedded_hal_02::blocking::i2c::{Read as _, Write as _, WriteRead as _};
 use embedded_hal_bus::i2c::RefCellDevice;
 use embedded_hal_mock::eh1::i2c::{Mock as I2cMock, Transaction as I2cT};
-use paperbot::driver::bus::{classify, Eh0Compat, GuardError, PollGuard, RegisterCheck};
+use paperbot::config;
+use paperbot::driver::bus::{classify, Eh0Compat, GuardError, PollGuard, RegisterCheck, Retry};
 use paperbot::driver::SensorError;
 use paperbot::sim::bus::{Fault, LoggedOp, SimBus, SimBusError};
 use paperbot::sim::sensors::SimSensors;
@@ -203,4 +204,68 @@ fn refcell_devices_share_one_sim_bus() {
     assert_eq!(id, [0x71]);
     assert_eq!(sim.bus.transactions(), 2);
     let _unused: SimBus = cell.into_inner();
+}
+
+#[test]
+fn retry_runs_a_failed_transaction_again_up_to_its_limit() {
+    let n = usize::from(config::i2c::TRANSACTION_RETRIES);
+    assert!(n >= 1);
+    let nack = ErrorKind::NoAcknowledge(NoAcknowledgeSource::Address);
+    // each method: n failures then a success (same arguments every time),
+    // then n + 1 failures: the last error comes back
+    let mut script = Vec::new();
+    script.extend(vec![I2cT::write_read(0x29, vec![0x13], vec![0]).with_error(ErrorKind::Bus); n]);
+    script.push(I2cT::write_read(0x29, vec![0x13], vec![0x07]));
+    script.extend(vec![I2cT::write(0x16, vec![0x0B, 0x01]).with_error(nack); n]);
+    script.push(I2cT::write(0x16, vec![0x0B, 0x01]));
+    script.extend(vec![I2cT::read(0x0C, vec![0, 0]).with_error(ErrorKind::ArbitrationLoss); n]);
+    script.push(I2cT::read(0x0C, vec![5, 6]));
+    script.extend(vec![I2cT::write(0x16, vec![0x0B, 0x01]).with_error(nack); n + 1]);
+    // the excepted register: one attempt only
+    script.push(I2cT::write(0x29, vec![0x8A, 0x16]).with_error(ErrorKind::Other));
+    script.push(I2cT::write(0x29, vec![0x8B, 0x16]));
+    let mut mock = I2cMock::new(&script);
+    let mut bus = Retry::with_config(&mut mock).except_writes_to(0x8A);
+    let mut status = [0u8; 1];
+    bus.write_read(0x29, &[0x13], &mut status).unwrap();
+    assert_eq!(status, [0x07]);
+    bus.write(0x16, &[0x0B, 0x01]).unwrap();
+    let mut two = [0u8; 2];
+    bus.read(0x0C, &mut two).unwrap();
+    assert_eq!(two, [5, 6]);
+    assert_eq!(bus.write(0x16, &[0x0B, 0x01]), Err(nack));
+    assert_eq!(bus.retried(), 4 * n as u32);
+    assert_eq!(bus.write(0x29, &[0x8A, 0x16]), Err(ErrorKind::Other));
+    bus.write(0x29, &[0x8B, 0x16]).unwrap();
+    assert_eq!(bus.retried(), 4 * n as u32);
+    mock.done();
+}
+
+#[test]
+fn retry_zero_is_a_pass_through() {
+    let mut mock = I2cMock::new(&[I2cT::write(0x16, vec![1]).with_error(ErrorKind::Bus), I2cT::write(0x16, vec![2])]);
+    let mut bus = Retry::new(&mut mock, 0);
+    assert_eq!(bus.write(0x16, &[1]), Err(ErrorKind::Bus));
+    bus.write(0x16, &[2]).unwrap();
+    assert_eq!(bus.retried(), 0);
+    mock.done();
+}
+
+#[test]
+fn sim_bus_one_shot_stuck_sda_clears_after_its_transaction_and_failures_are_counted() {
+    // as the board's master frees the bus (nine clocks) after a failure
+    let mut bus = SimBus::new();
+    let base = bus.transactions();
+    bus.inject(base, Fault::SdaStuck);
+    assert_eq!(bus.write(0x29, &[0]), Err(SimBusError::SdaStuck));
+    assert_eq!(bus.write(0x29, &[0]), Err(SimBusError::AddressNack(0x29)), "bus free again: nobody there");
+    assert_eq!(bus.failures(), 2);
+    // the persistent one holds until released
+    bus.set_sda_stuck(true);
+    for _ in 0..3 {
+        assert_eq!(bus.write(0x29, &[0]), Err(SimBusError::SdaStuck));
+    }
+    bus.set_sda_stuck(false);
+    assert_eq!(bus.write(0x29, &[0]), Err(SimBusError::AddressNack(0x29)));
+    assert_eq!(bus.failures(), 6);
 }

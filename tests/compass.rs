@@ -14,6 +14,12 @@ use paperbot::model::compass::{apply_asa, MagCounts};
 const MPU: u8 = 0x68;
 const AK: u8 = 0x0C;
 const NACK: ErrorKind = ErrorKind::NoAcknowledge(NoAcknowledgeSource::Address);
+
+/// A failing transaction as the driver sends it: once, then once per retry
+/// (`driver::bus::Retry`, `config::i2c::TRANSACTION_RETRIES`).
+fn retried(t: I2cT) -> Vec<I2cT> {
+    vec![t; usize::from(paperbot::config::i2c::TRANSACTION_RETRIES) + 1]
+}
 /// ASA below 128 on x: the mpu9250 crate's `asa - 128` on a u8 would panic.
 const ASA: [u8; 3] = [0x40, 0xB0, 0xFF];
 
@@ -117,7 +123,7 @@ fn read_errors_are_typed() {
         let mut script = read_script(0x01, [1, 2, 3], 0x10);
         script.truncate(step + 1);
         let failing = script.pop().unwrap().with_error(kind);
-        script.push(failing);
+        script.extend(retried(failing));
         let mut c = running(&script);
         assert_eq!(c.poll(), Err(nb::Error::Other(want)), "{step} {kind:?}");
         finish(c);
@@ -125,10 +131,10 @@ fn read_errors_are_typed() {
 }
 
 /// A bring-up that stops at `step` with `fail`; `delays` waits happen.
-fn failing_bring_up(step: usize, fail: I2cT, delays: usize, want: SensorError) {
+fn failing_bring_up(step: usize, fail: Vec<I2cT>, delays: usize, want: SensorError) {
     let mut script = bring_up_script(ASA);
     script.truncate(step);
-    script.push(fail);
+    script.extend(fail);
     let mut w = waits();
     w.truncate(delays);
     let mut c = Compass::with_config(I2cMock::new(&script), CheckedDelay::new(&w));
@@ -141,21 +147,21 @@ fn failing_bring_up(step: usize, fail: I2cT, delays: usize, want: SensorError) {
 #[test]
 fn bring_up_errors_are_typed() {
     // Nobody at 0x68.
-    failing_bring_up(0, I2cT::write_read(MPU, vec![0x75], vec![0]).with_error(NACK), 0, SensorError::Missing);
+    failing_bring_up(0, retried(I2cT::write_read(MPU, vec![0x75], vec![0]).with_error(NACK)), 0, SensorError::Missing);
     // An MPU6500: no magnetometer.
-    failing_bring_up(0, I2cT::write_read(MPU, vec![0x75], vec![0x70]), 0, SensorError::Missing);
+    failing_bring_up(0, vec![I2cT::write_read(MPU, vec![0x75], vec![0x70])], 0, SensorError::Missing);
     // Reset not acknowledged.
-    failing_bring_up(1, I2cT::write(MPU, vec![0x6B, 0x80]).with_error(ErrorKind::Bus), 0, SensorError::Bus);
+    failing_bring_up(1, retried(I2cT::write(MPU, vec![0x6B, 0x80]).with_error(ErrorKind::Bus)), 0, SensorError::Bus);
     // Bypass write lost.
-    failing_bring_up(5, I2cT::write(MPU, vec![0x37, 0x02]).with_error(ErrorKind::Bus), 1, SensorError::Bus);
+    failing_bring_up(5, retried(I2cT::write(MPU, vec![0x37, 0x02]).with_error(ErrorKind::Bus)), 1, SensorError::Bus);
     // The AK8963 does not show up (bypass did not take).
-    failing_bring_up(6, I2cT::write_read(AK, vec![0x00], vec![0]).with_error(NACK), 1, SensorError::Missing);
+    failing_bring_up(6, retried(I2cT::write_read(AK, vec![0x00], vec![0]).with_error(NACK)), 1, SensorError::Missing);
     // Something else at 0x0C.
-    failing_bring_up(6, I2cT::write_read(AK, vec![0x00], vec![0x00]), 1, SensorError::Missing);
+    failing_bring_up(6, vec![I2cT::write_read(AK, vec![0x00], vec![0x00])], 1, SensorError::Missing);
     // The two fuse-ROM reads disagree: a corrupted transfer.
-    failing_bring_up(10, I2cT::write_read(AK, vec![0x10], vec![0x40, 0xB0, 0xFE]), 3, SensorError::Bus);
+    failing_bring_up(10, vec![I2cT::write_read(AK, vec![0x10], vec![0x40, 0xB0, 0xFE])], 3, SensorError::Bus);
     // Continuous mode not set.
-    failing_bring_up(12, I2cT::write(AK, vec![0x0A, 0x16]).with_error(ErrorKind::Bus), 4, SensorError::Bus);
+    failing_bring_up(12, retried(I2cT::write(AK, vec![0x0A, 0x16]).with_error(ErrorKind::Bus)), 4, SensorError::Bus);
 }
 
 #[test]

@@ -481,6 +481,38 @@ fn bus_errors_take_a_sensor_down_after_a_few_and_it_is_reinitialised_after_the_b
 }
 
 #[test]
+fn a_nack_while_polling_counts_like_a_bus_error_and_at_a_reinit_keeps_the_sensor_down() {
+    let (mut ctl, mut out) = setup();
+    ctl.front().steady = Some(lidar(300));
+    let n = u32::from(config::timing::SENSOR_MAX_BUS_ERRORS);
+    // fewer than the limit in a row, mixed with bus errors: still up
+    for k in 0..n - 1 {
+        let e = if k % 2 == 1 { SensorError::Missing } else { SensorError::Bus };
+        ctl.front().queue.push_back(Err(nb::Error::Other(e)));
+    }
+    run(&mut ctl, &mut out, 0, 10 * n);
+    assert!(ctl.front_health().up);
+    assert_eq!(ctl.faults().missing + ctl.faults().bus, n - 1);
+    assert_eq!(ctl.front_health().last_error, Some(SensorError::Missing));
+    // a reading resets the count; then the limit of NACKs in a row: down
+    for _ in 0..n {
+        ctl.front().queue.push_back(Err(nb::Error::Other(SensorError::Missing)));
+    }
+    let t0 = 10 * n + 10;
+    run(&mut ctl, &mut out, t0, t0 + 10 * (n - 1));
+    assert!(ctl.front_health().up, "one short of the limit");
+    ctl.tick((t0 + 10 * (n - 1)) * 1000, &mut out);
+    assert!(!ctl.front_health().up);
+    // a re-init that finds no chip: a NACK there means missing, down again
+    ctl.front().reinit_failures = 1;
+    let retry_at = t0 + 10 * (n - 1) + config::timing::SENSOR_RETRY_MS;
+    run(&mut ctl, &mut out, t0 + 10 * n, retry_at + 10);
+    assert_eq!(ctl.front().reinit_calls, 1);
+    assert!(!ctl.front_health().up);
+    assert_eq!(ctl.faults().missing, (n - 1) / 2 + n + 1, "the glitches, the NACKs in a row, the re-init");
+}
+
+#[test]
 fn a_timeout_takes_a_sensor_down_at_once_a_bad_sample_does_not() {
     let (mut ctl, mut out) = setup();
     ctl.right().steady = Some(lidar(200));
@@ -509,9 +541,19 @@ fn a_silent_sensor_counts_as_a_timeout_and_the_loop_keeps_running() {
     assert!(!ctl.compass_health().up);
     // lidars are silent too (no steady reading): all three are down
     assert_eq!(ctl.faults().timeout, 3);
-    // re-init at +1 s, silent again for SENSOR_SILENT_MS, down, re-init +1 s later
-    let second = silent + 2 * config::timing::SENSOR_RETRY_MS + silent;
-    run(&mut ctl, &mut out, silent + 10, second);
+    // re-inits after the back-off, one per tick (each blocks the loop):
+    // front, then right, then the compass
+    let first = silent + config::timing::SENSOR_RETRY_MS;
+    run(&mut ctl, &mut out, silent + 10, first);
+    let calls = |ctl: &mut Ctl| [ctl.front().reinit_calls, ctl.right().reinit_calls, ctl.compass().reinit_calls];
+    assert_eq!(calls(&mut ctl), [0, 0, 0]);
+    for (k, want) in [[1, 0, 0], [1, 1, 0], [1, 1, 1]].into_iter().enumerate() {
+        ctl.tick((first + 10 * k as u32) * 1000, &mut out);
+        assert_eq!(calls(&mut ctl), want, "{k}");
+    }
+    // silent again for SENSOR_SILENT_MS, down, re-init 1 s later
+    let second = first + 20 + silent + config::timing::SENSOR_RETRY_MS;
+    run(&mut ctl, &mut out, first + 30, second);
     assert_eq!(ctl.compass().reinit_calls, 1);
     ctl.tick(second * 1000, &mut out);
     assert_eq!(ctl.compass().reinit_calls, 2);

@@ -33,6 +33,17 @@ enum Outage {
 }
 
 impl Outage {
+    /// True if the outage takes sensor `k` (front, right, compass) off the bus.
+    fn affects(self, k: usize) -> bool {
+        match self {
+            Outage::Unplugged(n) => usize::from(n) == k,
+            Outage::SdaStuck => true,
+            Outage::Nack(a) => {
+                [config::i2c::FRONT_LIDAR_ADDR, config::i2c::RIGHT_LIDAR_ADDR, config::i2c::AK8963_ADDR].get(k)
+                    == Some(&a)
+            }
+        }
+    }
     fn set(self, robot: &SimRobot, on: bool) {
         let s = &robot.sensors;
         match self {
@@ -53,6 +64,8 @@ struct Injected {
     corrupt: u64,
     outages: u64,
     transactions: u64,
+    /// Failing one-shots injected while no outage ran.
+    quiet_failing: u64,
 }
 
 fn random_fault(rng: &mut Rng) -> Fault {
@@ -84,6 +97,14 @@ struct Report {
     recoveries: u64,
     /// Fraction of the ticks each sensor was up (front, right, compass).
     up: [f64; 3],
+    /// The same over the ticks when no outage took that sensor off the bus
+    /// (what the noisy bus alone costs, plus the way back after an outage).
+    up_outside_outages: [f64; 3],
+    /// Transactions that failed on the bus (injected and outages).
+    bus_failures: u64,
+    /// Faults the loop saw (bus, timeout, missing) in ticks with no outage
+    /// running: what got through the transaction retries.
+    quiet_faults: u64,
     robot: SimRobot,
     secs: f64,
 }
@@ -110,6 +131,14 @@ fn run(r: Run) -> Report {
     let mut recovering: Option<(u64, [u32; 3], [bool; 3])> = None;
     let (mut worst_recovery, mut recoveries) = (0u64, 0u64);
     let mut up_ticks = [0u64; 3];
+    // (ticks without an outage on the sensor, of them up)
+    let mut outside = [(0u64, 0u64); 3];
+    let failures0 = robot.sensors.bus.failures();
+    let mut quiet_faults = 0u64;
+    let loud = |robot: &SimRobot| {
+        let f = robot.controller().faults();
+        u64::from(f.bus) + u64::from(f.timeout) + u64::from(f.missing)
+    };
     let per_s = i64::from(1_000_000 / TICK_US);
     for i in 0..r.ticks {
         if i == next_command {
@@ -155,6 +184,7 @@ fn run(r: Run) -> Report {
                 planned.push((t0 + k, f));
             }
         }
+        let loud0 = loud(&robot);
         robot.tick();
         let t1 = robot.sensors.bus.transactions();
         inj.transactions += u64::from(t1 - t0);
@@ -162,14 +192,24 @@ fn run(r: Run) -> Report {
             if at < t1 {
                 match f {
                     Fault::Corrupt(_) => inj.corrupt += 1,
-                    _ => inj.failing += 1,
+                    _ => {
+                        inj.failing += 1;
+                        inj.quiet_failing += u64::from(outage.is_none());
+                    }
                 }
             }
         }
+        if outage.is_none() {
+            quiet_faults += loud(&robot) - loud0;
+        }
         w.after_tick(&mut robot);
         let c = robot.controller();
-        for (u, h) in up_ticks.iter_mut().zip([c.front_health(), c.right_health(), c.compass_health()]) {
-            *u += u64::from(h.up);
+        for (k, h) in [c.front_health(), c.right_health(), c.compass_health()].iter().enumerate() {
+            up_ticks[k] += u64::from(h.up);
+            if !outage.is_some_and(|(o, _)| o.affects(k)) {
+                outside[k].0 += 1;
+                outside[k].1 += u64::from(h.up);
+            }
         }
         // recovery: each sensor is up again and has delivered a reading
         // since the outage ended (not necessarily all at the same moment:
@@ -208,6 +248,9 @@ fn run(r: Run) -> Report {
         worst_recovery_s: worst_recovery as f64 / per_s as f64,
         recoveries,
         up: up_ticks.map(|u| u as f64 / r.ticks.max(1) as f64),
+        up_outside_outages: outside.map(|(n, u)| u as f64 / n.max(1) as f64),
+        bus_failures: u64::from(robot.sensors.bus.failures().wrapping_sub(failures0)),
+        quiet_faults,
         robot,
         secs,
     }
@@ -218,7 +261,7 @@ fn print(name: &str, r: &Report) {
     let s = &r.watcher.seen;
     println!(
         "{name}: {} ticks ({:.2} h simulated) in {:.1} s; {:?} ({:.2} % of transactions faulty); {} recoveries, worst {:.1} s; \
-         up {:.0} / {:.0} / {:.0} % of the time; \
+         up {:.1} / {:.1} / {:.1} % of the time ({:.2} / {:.2} / {:.2} % outside its outages); {} bus failures, {} faults seen outside outages; \
          telemetry counters {:?}; health {:?} {:?} {:?}; {} deadman stops; estimate worst {:.0} mm outside",
         s.ticks,
         c.clock_us() as f64 / 3.6e9,
@@ -230,6 +273,11 @@ fn print(name: &str, r: &Report) {
         100.0 * r.up[0],
         100.0 * r.up[1],
         100.0 * r.up[2],
+        100.0 * r.up_outside_outages[0],
+        100.0 * r.up_outside_outages[1],
+        100.0 * r.up_outside_outages[2],
+        r.bus_failures,
+        r.quiet_faults,
         s.last_faults,
         c.front_health(),
         c.right_health(),
@@ -245,9 +293,19 @@ fn check(r: &Report) {
     // the faults are counted, and the telemetry says so
     let counted = u64::from(f.bus) + u64::from(f.timeout) + u64::from(f.missing) + u64::from(f.bad_sample);
     assert!(counted > 0 && s.last_faults.bus > 0, "{f:?}");
-    // every failing one-shot that hit a poll is one counted fault at most
-    // (a failed re-init counts once whatever failed in it); outages add more
-    assert!(counted >= r.injected.failing / 2, "counted {counted} of {} failing transactions", r.injected.failing);
+    // every failing one-shot failed its transaction on the bus (outages
+    // fail more)...
+    assert!(r.bus_failures >= r.injected.failing, "{} bus failures, {:?}", r.bus_failures, r.injected);
+    // ...but the transaction retries (config::i2c::TRANSACTION_RETRIES) let
+    // through only the runs of failures longer than the retries: the loop
+    // sees at most one fault per 100 failing one-shots outside outages
+    // (measured: see each test)
+    assert!(
+        r.quiet_faults * 100 <= r.injected.quiet_failing,
+        "{} faults seen of {} failing one-shots outside outages",
+        r.quiet_faults,
+        r.injected.quiet_failing
+    );
     // the last row is at most a telemetry period old
     let t = s.last_faults;
     assert!(t.bus <= f.bus && t.timeout <= f.timeout && t.missing <= f.missing, "{t:?} {f:?}");
@@ -255,7 +313,8 @@ fn check(r: &Report) {
     // may still be running or recovering)
     if r.recovery_limit_s.is_some() {
         assert!(
-            r.recoveries + 1 >= r.injected.outages && r.recoveries > 50,
+            // (more than one a minute: over 50 in an hour)
+            r.recoveries + 1 >= r.injected.outages && r.recoveries * 7_200 > s.ticks,
             "{} of {}",
             r.recoveries,
             r.injected.outages
@@ -269,41 +328,82 @@ fn check(r: &Report) {
     assert!(s.worst_outside_mm < 2_500.0, "{}", s.worst_outside_mm);
 }
 
+/// Checks each sensor's up-time (front, right, compass) and the overruns
+/// per hour of robot time against the given bounds.
+fn check_up(r: &Report, min_up: [f64; 3], min_up_outside: f64, max_overruns_per_h: f64) {
+    let c = r.robot.controller();
+    for (k, (up, min)) in r.up.iter().zip(min_up).enumerate() {
+        assert!(*up > min, "sensor {k} (front, right, compass) up {:.1} % of the time", 100.0 * up);
+        let outside = r.up_outside_outages[k];
+        assert!(outside > min_up_outside, "sensor {k} up {:.2} % outside its outages", 100.0 * outside);
+    }
+    let hours = c.clock_us() as f64 / 3.6e9;
+    let per_h = f64::from(c.faults().overruns) / hours;
+    assert!(per_h < max_overruns_per_h, "{per_h:.0} overruns per hour");
+}
+
 /// An hour of robot time with outages every 10..50 s on a bus where 1 %
 /// of the transactions fail or corrupt at random: after every outage each
-/// sensor is back up and delivering within 60 s (measured worst over seeds
-/// 21, 31, 41, 51: 15 to 26 s; a lidar bring-up of about a hundred
-/// transactions gets through a 1 % bus about one try in four, one try a
-/// second).
+/// sensor is back up and delivering within 5 s. Measured over seeds 21 and
+/// 30..40 (`cargo test --test faults_long -- --ignored` for 30..40): worst
+/// recovery 1.0 to 1.9 s; each sensor up 94.7 to 96.5 % of the time, the
+/// rest being the outages themselves (one takes a sensor off the bus for
+/// 0.2..5 s, all three for a stuck SDA: about 3.5 % of the time) and the
+/// back-off after them; up 99.11 to 99.51 % of the ticks when no outage
+/// has it off the bus; 67 to 124 overruns per hour (one per
+/// re-initialisation that waits for a chip's reset). Before the
+/// transaction retries (seed 21): recovery 15 to 26 s (over 30 s for seed
+/// 30), up 39 / 39 / 62 %, 1,336 overruns per hour.
 #[test]
 fn an_hour_of_outages_on_a_one_percent_bus() {
-    let r = run(Run { ticks: 360_000, fault_rate: 0.01, seed: 21, recovery_limit_s: Some(60.0) });
-    print("outages, 1 % faulty", &r);
-    check(&r);
+    for seed in ONE_PERCENT_SEEDS {
+        let r = run(Run { ticks: 360_000, fault_rate: 0.01, seed, recovery_limit_s: Some(5.0) });
+        print(&format!("outages, 1 % faulty, seed {seed}"), &r);
+        check(&r);
+        check_up(&r, [0.93; 3], 0.985, 200.0);
+    }
+}
+
+/// The seeds of [`an_hour_of_outages_on_a_one_percent_bus`] (21: the
+/// original; 30: failed a 30 s recovery limit before the retries).
+const ONE_PERCENT_SEEDS: [u64; 3] = [21, 30, 34];
+
+/// The 1 % run over more seeds (about 2 s each), for the figures above.
+#[test]
+#[ignore]
+fn an_hour_of_outages_on_a_one_percent_bus_more_seeds() {
+    for seed in 30..=40 {
+        let r = run(Run { ticks: 360_000, fault_rate: 0.01, seed, recovery_limit_s: Some(5.0) });
+        print(&format!("outages, 1 % faulty, seed {seed}"), &r);
+        check(&r);
+        check_up(&r, [0.93; 3], 0.985, 200.0);
+    }
 }
 
 /// An hour with 3 % of the transactions faulty and outages regardless of
-/// recovery. A lidar bring-up is about a hundred transactions and gives up
-/// at the first failure, so at this rate the lidars are down most of the
-/// time (measured, see the report): the loop still never panics, stops on the
-/// deadman, counts every fault and keeps the estimate bounded.
+/// recovery: with the transaction retries, a poll or a bring-up fails
+/// only when three attempts in a row do, so the sensors are down about as
+/// long as the outages take them (measured: up 95.4 / 96.3 / 95.0 % of the
+/// time, 99.30 / 99.36 / 99.11 % outside its outages, 119 overruns per
+/// hour, worst recovery 1.8 s; before the retries: 1 / 2 / 32 %, a single
+/// NACKed poll took a sensor down for a second and a re-init that got
+/// through one try in ten).
 #[test]
 fn an_hour_with_three_percent_faulty_transactions() {
     let r = run(Run { ticks: 360_000, fault_rate: 0.03, seed: 22, recovery_limit_s: None });
     print("3 % faulty", &r);
     check(&r);
-    // every sensor comes back now and then, even on this bus (measured: up
-    // 1 / 2 / 32 % of the time: a single NACKed poll takes a sensor down
-    // for a second and a full re-init, see the report)
-    let c = r.robot.controller();
-    assert!(c.front_health().reinits > 10 && c.right_health().reinits > 10 && c.compass_health().reinits > 100);
+    check_up(&r, [0.93; 3], 0.985, 200.0);
 }
 
-/// Ten minutes with 10 % of the transactions faulty: the lidars hardly
-/// come up at all, and nothing else changes.
+/// Ten minutes with 10 % of the transactions faulty: every sensor comes
+/// back within 5 s after every outage (measured: worst 3.6 s, up 93.5 to
+/// 96.5 % of the time, 98.2 to 99.3 % outside its outages, 22 to 25
+/// overruns; before the retries the lidars never came back).
 #[test]
 fn ten_minutes_with_ten_percent_faulty_transactions() {
-    let r = run(Run { ticks: 60_000, fault_rate: 0.10, seed: 23, recovery_limit_s: None });
+    let r = run(Run { ticks: 60_000, fault_rate: 0.10, seed: 23, recovery_limit_s: Some(5.0) });
     print("10 % faulty", &r);
     check(&r);
+    check_up(&r, [0.90; 3], 0.97, 250.0);
 }

@@ -20,6 +20,12 @@ use paperbot::model::lidar::Range;
 
 const NACK: ErrorKind = ErrorKind::NoAcknowledge(NoAcknowledgeSource::Address);
 
+/// A failing transaction as the driver sends it: once, then once per retry
+/// (`driver::bus::Retry`, `config::i2c::TRANSACTION_RETRIES`).
+fn retried(t: I2cT) -> Vec<I2cT> {
+    vec![t; usize::from(paperbot::config::i2c::TRANSACTION_RETRIES) + 1]
+}
+
 fn waits() -> Vec<DelayT> {
     vec![DelayT::delay_us(config::lidar::RESET_TIME_US), DelayT::delay_us(config::lidar::BOOT_TIME_US)]
 }
@@ -179,7 +185,7 @@ fn read_errors_are_typed() {
         let mut script = read_script(FRONT, 0x04, 500);
         script.truncate(step + 1);
         let failing = script.pop().unwrap().with_error(kind);
-        script.push(failing);
+        script.extend(retried(failing));
         let (mut lidar, _) = running_front(&script);
         assert_eq!(lidar.poll(), Err(nb::Error::Other(want)), "step {step} {kind:?}");
         finish(lidar);
@@ -196,10 +202,10 @@ fn a_lidar_not_brought_up_is_not_ready_and_touches_nothing() {
 
 /// Bring-up scripts that fail at `step` (with `kind`, or with the given
 /// reply), and what the driver must say. The lidar is left in reset.
-fn failing_bring_up(step: usize, fail: I2cT, want: SensorError) {
+fn failing_bring_up(step: usize, fail: Vec<I2cT>, want: SensorError) {
     let mut script = bring_up_script(FRONT);
     script.truncate(step);
-    script.push(fail);
+    script.extend(fail);
     let i2c = I2cMock::new(&script);
     let pin = PinMock::new(&[PinT::set(State::Low), PinT::set(State::High), PinT::set(State::Low)]);
     let mut lidar = Lidar::front(i2c, pin, CheckedDelay::new(&waits()));
@@ -212,16 +218,17 @@ fn failing_bring_up(step: usize, fail: I2cT, want: SensorError) {
 #[test]
 fn bring_up_errors_are_typed_and_leave_the_lidar_in_reset() {
     // No chip at 0x29.
-    failing_bring_up(0, I2cT::write_read(0x29, vec![0xC0], vec![0]).with_error(NACK), SensorError::Missing);
+    failing_bring_up(0, retried(I2cT::write_read(0x29, vec![0xC0], vec![0]).with_error(NACK)), SensorError::Missing);
     // Something else at 0x29.
-    failing_bring_up(0, I2cT::write_read(0x29, vec![0xC0], vec![0x42]), SensorError::Missing);
+    failing_bring_up(0, vec![I2cT::write_read(0x29, vec![0xC0], vec![0x42])], SensorError::Missing);
     // A bus error in the middle of the tuning table.
-    failing_bring_up(40, bring_up_script(FRONT).remove(40).with_error(ErrorKind::Bus), SensorError::Bus);
-    // The address change not acknowledged.
+    failing_bring_up(40, retried(bring_up_script(FRONT).remove(40).with_error(ErrorKind::Bus)), SensorError::Bus);
+    // The address change not acknowledged: not retried (the chip may have
+    // moved), the bring-up fails at once.
     let i = address_change_index();
-    failing_bring_up(i, I2cT::write(0x29, vec![0x8A, FRONT]).with_error(ErrorKind::Bus), SensorError::Bus);
+    failing_bring_up(i, vec![I2cT::write(0x29, vec![0x8A, FRONT]).with_error(ErrorKind::Bus)], SensorError::Bus);
     // The chip gone right after the move.
-    failing_bring_up(i + 1, bring_up_script(FRONT).remove(i + 1).with_error(NACK), SensorError::Missing);
+    failing_bring_up(i + 1, retried(bring_up_script(FRONT).remove(i + 1).with_error(NACK)), SensorError::Missing);
 }
 
 /// Index of the step that polls the SPAD info (page 7, 0x83) until ready.
@@ -260,6 +267,6 @@ fn implausible_timing_registers_are_refused_before_the_crate_does_arithmetic_on_
     ];
     for (reg, value) in bad {
         let i = BRING_UP.iter().position(|s| s.kind == Kind::Read && s.write == [reg]).unwrap();
-        failing_bring_up(i, I2cT::write_read(0x29, vec![reg], value.clone()), SensorError::Bus);
+        failing_bring_up(i, retried(I2cT::write_read(0x29, vec![reg], value.clone())), SensorError::Bus);
     }
 }

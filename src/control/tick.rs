@@ -11,7 +11,11 @@
 //! 3. sensing: each sensor is polled once, never waited for; a fresh reading
 //!    corrects the estimator (an outlier is counted in the telemetry's
 //!    `f_outliers`); a failed sensor is counted, marked down and
-//!    re-initialised after [`config::timing::SENSOR_RETRY_MS`];
+//!    re-initialised after [`config::timing::SENSOR_RETRY_MS`] (a bus
+//!    error, or a NACK of a chip that was working, takes it down only after
+//!    [`config::timing::SENSOR_MAX_BUS_ERRORS`] in a row; at most one
+//!    re-initialisation per tick, as each blocks the loop for its waits and
+//!    its ~110 (lidar) or 13 (compass) transactions);
 //! 4. deciding: a timed command that has run out, or the deadman
 //!    ([`config::timing::DEADMAN_MS`] without a command), stops the robot;
 //! 5. acting: the servo commands of the current mode go to the servos
@@ -46,7 +50,7 @@ use crate::control::protocol::{
 };
 use crate::driver::calibration::{CalStatus, CalibrationError, MagCalibrator};
 use crate::driver::{CompassSample, HeadingSensor, LidarSample, MagCalibrate, SensorError, Servos};
-use crate::math::{Coord, Dt, Length, TurnRate};
+use crate::math::{Angle, Coord, Dt, Length, TurnRate};
 use crate::model::compass::MagCalibration;
 use crate::model::estimator::{Estimator, Update};
 use crate::model::measurement::{Arena, LidarId};
@@ -189,6 +193,13 @@ pub struct Controller<F, R, C, S> {
     fresh_front: Option<LidarSample>,
     fresh_right: Option<LidarSample>,
     fresh_compass: Option<CompassSample>,
+    /// Readings waiting for their estimator correction (see
+    /// `config::timing::MAX_CORRECTIONS_PER_TICK`).
+    pending_front: Option<Length>,
+    pending_right: Option<Length>,
+    pending_heading: Option<Angle>,
+    /// The lidar corrected last, so the two take turns.
+    front_went_last: bool,
     /// Newest readings (for the estimator and tests).
     last_front: Option<LidarSample>,
     last_right: Option<LidarSample>,
@@ -203,6 +214,8 @@ pub struct Controller<F, R, C, S> {
     calibrator: Option<MagCalibrator>,
     /// The sweep has all its samples (finished in the same tick).
     calibration_done: bool,
+    /// A sensor was re-initialised in this tick (the others wait a tick).
+    reinit_ran: bool,
 }
 
 /// Which sensor (for the shared fault handling).
@@ -253,6 +266,10 @@ where
             fresh_front: None,
             fresh_right: None,
             fresh_compass: None,
+            pending_front: None,
+            pending_right: None,
+            pending_heading: None,
+            front_went_last: false,
             last_front: None,
             last_right: None,
             last_compass: None,
@@ -263,6 +280,7 @@ where
             ticks: 0,
             calibrator: None,
             calibration_done: false,
+            reinit_ran: false,
         };
         // config::timing::TELEMETRY_HZ is asserted below to fit the protocol's range
         c.set_rate(config::timing::TELEMETRY_HZ as u16);
@@ -417,8 +435,13 @@ where
         // 2. state update with what the servos drove since the last tick
         self.advance(self.applied.motion, dt_us);
 
-        // 3. sensing
+        // 3. sensing, then at most MAX_CORRECTIONS_PER_TICK corrections
         self.sense(now);
+        for _ in 0..config::timing::MAX_CORRECTIONS_PER_TICK {
+            if !self.correct_one() {
+                break;
+            }
+        }
 
         // 4. deciding
         self.decide(now, sink);
@@ -454,31 +477,50 @@ where
     }
 
     fn sense(&mut self, now: u64) {
+        self.reinit_ran = false;
         if let Some(Reading::Lidar(s)) = self.service(Which::Front, now) {
             self.fresh_front = Some(s);
             self.last_front = Some(s);
             if let Range::Target(d) = s.range {
-                let u = self.estimator.update_lidar(LidarId::Front, d);
-                self.count_update(u);
+                self.pending_front = Some(d);
             }
         }
         if let Some(Reading::Lidar(s)) = self.service(Which::Right, now) {
             self.fresh_right = Some(s);
             self.last_right = Some(s);
             if let Range::Target(d) = s.range {
-                let u = self.estimator.update_lidar(LidarId::Right, d);
-                self.count_update(u);
+                self.pending_right = Some(d);
             }
         }
         if let Some(Reading::Compass(s)) = self.service(Which::Compass, now) {
             self.fresh_compass = Some(s);
             self.last_compass = Some(s);
-            let u = self.estimator.update_heading(s.heading);
-            self.count_update(u);
+            self.pending_heading = Some(s.heading);
             if let Some(cal) = self.calibrator.as_mut() {
                 self.calibration_done = cal.feed(s.raw) == CalStatus::Done;
             }
         }
+    }
+
+    /// Applies one waiting reading to the estimator: a lidar first (the two
+    /// take turns), else the compass. False when nothing waits.
+    fn correct_one(&mut self) -> bool {
+        let front_first = !self.front_went_last || self.pending_right.is_none();
+        let lidar = if front_first && self.pending_front.is_some() {
+            self.pending_front.take().map(|d| (LidarId::Front, d))
+        } else {
+            self.pending_right.take().map(|d| (LidarId::Right, d))
+        };
+        let u = if let Some((id, d)) = lidar {
+            self.front_went_last = id == LidarId::Front;
+            self.estimator.update_lidar(id, d)
+        } else if let Some(h) = self.pending_heading.take() {
+            self.estimator.update_heading(h)
+        } else {
+            return false;
+        };
+        self.count_update(u);
+        true
     }
 
     fn count_update(&mut self, u: Update) {
@@ -487,13 +529,16 @@ where
         }
     }
 
-    /// Polls one sensor (or re-initialises it when its back-off is over).
+    /// Polls one sensor (or re-initialises it when its back-off is over and
+    /// no other sensor was re-initialised in this tick: a bring-up blocks
+    /// the loop, so one per tick keeps a tick's cost to one bring-up).
     fn service(&mut self, which: Which, now: u64) -> Option<Reading> {
         let health = *self.health(which);
         if !health.up {
-            if now < health.retry_at_us {
+            if now < health.retry_at_us || self.reinit_ran {
                 return None;
             }
+            self.reinit_ran = true;
             let result = match which {
                 Which::Front => self.front.reinit(),
                 Which::Right => self.right.reinit(),
@@ -538,7 +583,12 @@ where
     }
 
     /// Counts a fault; takes the sensor down unless it was a dropped sample
-    /// or one of too few bus errors in a row.
+    /// or one of too few bus errors in a row. A NACK of its address
+    /// (`Missing`) from a sensor that is up, i.e. while polling a chip that
+    /// was working, counts like a bus error: on a noisy bus a corrupted
+    /// address byte is NACKed too, and a chip that is really gone is found
+    /// after `SENSOR_MAX_BUS_ERRORS` polls (30 ms) anyway. At a
+    /// re-initialisation a NACK means what it says: the sensor stays down.
     fn fail(&mut self, which: Which, e: SensorError, now: u64) {
         let f = &mut self.faults;
         let counter = match e {
@@ -552,7 +602,7 @@ where
         h.last_error = Some(e);
         let down = match e {
             SensorError::BadSample => false,
-            SensorError::Bus => {
+            SensorError::Bus | SensorError::Missing if h.up => {
                 h.consecutive_bus_errors = h.consecutive_bus_errors.saturating_add(1);
                 h.consecutive_bus_errors >= config::timing::SENSOR_MAX_BUS_ERRORS
             }

@@ -19,12 +19,22 @@
 //!   trait impls; ours has no dependency and no `unsafe`.
 //! - **Error classes**: [`classify`] maps any eh1 bus error onto the
 //!   driver's [`SensorError`] by its [`ErrorKind`]: a NACK of the address is
-//!   a missing chip, anything else on the wire is a bus error.
+//!   a missing chip, anything else on the wire is a bus error. (The control
+//!   loop counts a NACK while polling a chip that was working like a bus
+//!   error: a glitch, see `control::tick`.)
+//! - **Transient faults**: [`Retry`] runs a failed transaction again, up to
+//!   [`config::i2c::TRANSACTION_RETRIES`] times, before the driver sees the
+//!   error. The board's master has already freed the bus after the failure
+//!   (STOP, or nine clocks for a stuck SDA: `board::bitbang_i2c`), so the
+//!   retry starts on an idle bus. A retry repeats the whole transaction, so
+//!   it is only used where every transaction is idempotent; every one the
+//!   drivers here issue is (see [`Retry`]).
 
 use embedded_hal::i2c::{ErrorKind, ErrorType, I2c, NoAcknowledgeSource, Operation};
 use embedded_hal_02::blocking::i2c as i2c02;
 
 use super::SensorError;
+use crate::config;
 
 /// A driver's handle on the shared bus (embedded-hal-bus 0.3, see the
 /// module docs). Create one per driver from the same `RefCell`:
@@ -203,5 +213,117 @@ impl<T: I2c, C: RegisterCheck> I2c for PollGuard<T, C> {
             [_, Operation::Read(buf)] => self.after(reg, buf),
             _ => Ok(()),
         }
+    }
+}
+
+/// An [`I2c`] wrapper that runs a failed transaction again, up to `retries`
+/// more times, and returns the last error if every attempt failed. Each
+/// attempt is the same method on the inner bus with the same arguments, so
+/// the chip sees the transaction again from its START (write buffers are
+/// sent again, read buffers refilled).
+///
+/// Only for idempotent transactions: doing one twice must leave the chip as
+/// doing it once. That holds for everything the drivers here send:
+/// - register writes (`[reg, value...]`) set the same value again;
+/// - register reads (`[reg]` then a read) re-set the register pointer first;
+/// - the reads with a side effect are ones whose repetition is harmless:
+///   the AK8963's data read (HXL..ST2) releases the data lock and clears
+///   DRDY, and a second read gets the same (or the next whole) sample; the
+///   VL53L0X's result registers are cleared by a separate write
+///   (SYSTEM_INTERRUPT_CLEAR), not by reading them, and its status read
+///   (RESULT_INTERRUPT_STATUS) clears nothing. No driver here reads a
+///   clear-on-read register (e.g. the MPU9250's INT_STATUS) or a FIFO,
+///   where a retry would lose data: keep such reads outside a `Retry`.
+///
+/// One write is not idempotent: the VL53L0X's address change
+/// (I2C_SLAVE_DEVICE_ADDRESS). If it reaches the chip and the transfer
+/// fails after it (a clock-stretch timeout), the chip has moved, and the
+/// same write to the old address is NACKed. [`Retry::except_writes_to`]
+/// leaves writes to such a register alone: their failure goes straight to
+/// the driver (the bring-up fails and is tried again from a reset).
+///
+/// Every error kind is retried, an address NACK too: on a noisy bus a
+/// corrupted address byte is NACKed like an absent chip. An absent chip
+/// costs `retries` more transactions before the error comes back.
+///
+/// Wrap a `&mut` to keep ownership: `Retry::new(&mut i2c, n)`.
+#[derive(Debug)]
+pub struct Retry<I> {
+    inner: I,
+    retries: u8,
+    /// Writes to this register are not retried (see the type's docs).
+    except: Option<u8>,
+    /// Failed attempts that were retried (for tests and statistics).
+    retried: u32,
+}
+
+impl<I: I2c> Retry<I> {
+    /// `retries` more attempts after a failure (0: a plain pass-through).
+    pub fn new(inner: I, retries: u8) -> Self {
+        Retry { inner, retries, except: None, retried: 0 }
+    }
+
+    /// Does not retry a plain write whose first byte is `reg` (a register
+    /// write that is not idempotent).
+    pub fn except_writes_to(mut self, reg: u8) -> Self {
+        self.except = Some(reg);
+        self
+    }
+
+    /// With [`config::i2c::TRANSACTION_RETRIES`].
+    pub fn with_config(inner: I) -> Self {
+        Self::new(inner, config::i2c::TRANSACTION_RETRIES)
+    }
+
+    /// Failed attempts that were run again so far.
+    pub fn retried(&self) -> u32 {
+        self.retried
+    }
+
+    /// Gives the inner bus back.
+    pub fn into_inner(self) -> I {
+        self.inner
+    }
+
+    /// Runs `f` until it succeeds or `1 + retries` attempts have failed.
+    fn attempt<R>(&mut self, mut f: impl FnMut(&mut I) -> Result<R, I::Error>) -> Result<R, I::Error> {
+        let mut left = self.retries;
+        loop {
+            match f(&mut self.inner) {
+                Ok(r) => return Ok(r),
+                Err(e) if left == 0 => return Err(e),
+                Err(_) => {
+                    left = left.saturating_sub(1); // left > 0 here
+                    self.retried = self.retried.saturating_add(1);
+                }
+            }
+        }
+    }
+}
+
+impl<I: I2c> ErrorType for Retry<I> {
+    type Error = I::Error;
+}
+
+/// Each method retries the same method of the inner bus (so a mock sees
+/// exactly the driver's calls, repeated after each failure).
+impl<I: I2c> I2c for Retry<I> {
+    fn read(&mut self, address: u8, read: &mut [u8]) -> Result<(), Self::Error> {
+        self.attempt(|i| i.read(address, read))
+    }
+
+    fn write(&mut self, address: u8, write: &[u8]) -> Result<(), Self::Error> {
+        if self.except.is_some() && write.first() == self.except.as_ref() {
+            return self.inner.write(address, write);
+        }
+        self.attempt(|i| i.write(address, write))
+    }
+
+    fn write_read(&mut self, address: u8, write: &[u8], read: &mut [u8]) -> Result<(), Self::Error> {
+        self.attempt(|i| i.write_read(address, write, read))
+    }
+
+    fn transaction(&mut self, address: u8, operations: &mut [Operation<'_>]) -> Result<(), Self::Error> {
+        self.attempt(|i| i.transaction(address, operations))
     }
 }

@@ -29,7 +29,7 @@ use embedded_hal::delay::DelayNs;
 use embedded_hal::i2c::I2c;
 use mpu9250::{Device, I2CError, I2cDevice, MpuXDevice, Register};
 
-use super::bus::{classify, Eh0Compat};
+use super::bus::{classify, Eh0Compat, Retry};
 use super::{CompassSample, HeadingSensor, MagCalibrate, SensorError};
 use crate::config;
 use crate::model::compass::{CompassModel, MagCalibration, MagCounts};
@@ -122,26 +122,32 @@ impl<I2C: I2c, D: DelayNs> Compass<I2C, D> {
 
     /// The MPU9250 side, through the `mpu9250` crate's register access.
     fn init_mpu(&mut self) -> Result<(), SensorError> {
-        let mut mpu = I2cDevice::new(Eh0Compat(&mut self.i2c));
+        let mut mpu = I2cDevice::new(Eh0Compat(Retry::with_config(&mut self.i2c)));
         let who = Device::read(&mut mpu, Register::WHO_AM_I).map_err(mpu_error)?;
         if who != MpuXDevice::MPU9250 as u8 && who != MpuXDevice::MPU9255 as u8 {
             return Err(SensorError::Missing);
         }
         Device::write(&mut mpu, Register::PWR_MGMT_1, mpu_bits::H_RESET).map_err(mpu_error)?;
         self.delay.delay_us(config::compass::MPU_RESET_TIME_US);
-        let mut mpu = I2cDevice::new(Eh0Compat(&mut self.i2c));
+        let mut mpu = I2cDevice::new(Eh0Compat(Retry::with_config(&mut self.i2c)));
         Device::write(&mut mpu, Register::PWR_MGMT_1, mpu_bits::CLKSEL_AUTO).map_err(mpu_error)?;
         Device::write(&mut mpu, Register::PWR_MGMT_2, mpu_bits::DISABLE_ACCEL_GYRO).map_err(mpu_error)?;
         Device::write(&mut mpu, Register::USER_CTRL, mpu_bits::USER_CTRL_NONE).map_err(mpu_error)?;
         Device::write(&mut mpu, Register::INT_PIN_CFG, mpu_bits::BYPASS_EN).map_err(mpu_error)
     }
 
+    /// A register write, retried on a failure (idempotent).
     fn ak_write(&mut self, reg: u8, value: u8) -> Result<(), SensorError> {
-        self.i2c.write(config::i2c::AK8963_ADDR, &[reg, value]).map_err(|e| classify(&e))
+        let mut i2c = Retry::with_config(&mut self.i2c);
+        i2c.write(config::i2c::AK8963_ADDR, &[reg, value]).map_err(|e| classify(&e))
     }
 
+    /// A register read, retried on a failure: idempotent for every register
+    /// read here (ST1 clears nothing; a repeated HXL..ST2 read gets the same
+    /// or the next whole sample, see `Retry`).
     fn ak_read(&mut self, reg: u8, buf: &mut [u8]) -> Result<(), SensorError> {
-        self.i2c.write_read(config::i2c::AK8963_ADDR, &[reg], buf).map_err(|e| classify(&e))
+        let mut i2c = Retry::with_config(&mut self.i2c);
+        i2c.write_read(config::i2c::AK8963_ADDR, &[reg], buf).map_err(|e| classify(&e))
     }
 
     fn ak_mode(&mut self, mode: u8) -> Result<(), SensorError> {

@@ -30,7 +30,7 @@ use embedded_hal::digital::OutputPin;
 use embedded_hal::i2c::I2c;
 use vl53l0x::VL53L0x;
 
-use super::bus::{classify, GuardError, PollGuard, RegisterCheck};
+use super::bus::{classify, GuardError, PollGuard, RegisterCheck, Retry};
 use super::{LidarSample, RangeSensor, SensorError};
 use crate::config;
 use crate::model::lidar::LidarModel;
@@ -175,8 +175,12 @@ impl<I2C: I2c, X: OutputPin, D: DelayNs> Lidar<I2C, X, D> {
     /// The crate's initialisation at the boot address, the move to our
     /// address, the timing budget and continuous (back-to-back) ranging.
     fn init_chip(&mut self) -> Result<(), SensorError> {
+        // Retry outside the guard: an implausible value (a corrupted read)
+        // is read again too, not only a failed transfer. The address change
+        // is not retried (not idempotent, see `Retry`).
         let guard = PollGuard::new(&mut self.i2c, Vl53l0xCheck::default(), config::lidar::INIT_POLL_LIMIT);
-        let mut chip = VL53L0x::with_address(guard, config::i2c::LIDAR_DEFAULT_ADDR).map_err(vl_error)?;
+        let bus = Retry::with_config(guard).except_writes_to(reg::I2C_SLAVE_DEVICE_ADDRESS);
+        let mut chip = VL53L0x::with_address(bus, config::i2c::LIDAR_DEFAULT_ADDR).map_err(vl_error)?;
         if self.address != config::i2c::LIDAR_DEFAULT_ADDR {
             chip.set_address(self.address).map_err(vl_error)?;
         }
@@ -217,14 +221,16 @@ impl<I2C: I2c, X: OutputPin, D: DelayNs> Lidar<I2C, X, D> {
         if !self.running {
             return Err(nb::Error::Other(SensorError::NotReady));
         }
+        // All three are idempotent (see `Retry`): retried on a failure.
+        let mut i2c = Retry::with_config(&mut self.i2c);
         let mut status = [0u8; 1];
-        self.i2c.write_read(self.address, &[reg::RESULT_INTERRUPT_STATUS], &mut status).map_err(|e| classify(&e))?;
+        i2c.write_read(self.address, &[reg::RESULT_INTERRUPT_STATUS], &mut status).map_err(|e| classify(&e))?;
         if status[0] & reg::INTERRUPT_MASK == 0 {
             return Err(nb::Error::WouldBlock);
         }
         let mut range = [0u8; 2];
-        self.i2c.write_read(self.address, &[reg::RESULT_RANGE_MM], &mut range).map_err(|e| classify(&e))?;
-        self.i2c.write(self.address, &[reg::SYSTEM_INTERRUPT_CLEAR, 0x01]).map_err(|e| classify(&e))?;
+        i2c.write_read(self.address, &[reg::RESULT_RANGE_MM], &mut range).map_err(|e| classify(&e))?;
+        i2c.write(self.address, &[reg::SYSTEM_INTERRUPT_CLEAR, 0x01]).map_err(|e| classify(&e))?;
         Ok(u16::from_be_bytes(range))
     }
 

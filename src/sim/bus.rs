@@ -14,6 +14,14 @@
 //! ([`SimBus::set_nack_address`]), SDA held low by a stuck slave
 //! ([`SimBus::set_sda_stuck`]). Chips can also disappear and come back
 //! (their own `set_present`).
+//!
+//! A one-shot [`Fault::SdaStuck`] is a slave that held SDA through one
+//! transaction and let go when the master freed the bus afterwards: the
+//! board's bit-banged master sends STOP, or nine clocks and STOP, after
+//! every failed transfer (UM10204 3.1.16, `board::bitbang_i2c`), so the next
+//! transaction finds an idle bus. The simulated bus behaves the same: the
+//! fault clears by itself after its transaction. A slave that keeps SDA low
+//! through the recovery is the persistent [`SimBus::set_sda_stuck`].
 
 use std::cell::{Cell, RefCell};
 use std::rc::Rc;
@@ -130,6 +138,7 @@ pub struct LoggedTxn {
 struct BusState {
     targets: Vec<Rc<RefCell<dyn I2cTarget>>>,
     count: u32,
+    failures: u32,
     faults: Vec<(u32, Fault)>,
     nack_addrs: Vec<u8>,
     sda_stuck: bool,
@@ -153,6 +162,7 @@ impl SimBus {
         SimBus(Rc::new(RefCell::new(BusState {
             targets: Vec::new(),
             count: 0,
+            failures: 0,
             faults: Vec::new(),
             nack_addrs: Vec::new(),
             sda_stuck: false,
@@ -170,6 +180,11 @@ impl SimBus {
     /// Transactions so far (including failed ones).
     pub fn transactions(&self) -> u32 {
         self.0.borrow().count
+    }
+
+    /// Transactions that failed (returned an error) so far.
+    pub fn failures(&self) -> u32 {
+        self.0.borrow().failures
     }
 
     /// Transactions that two chips answered at once.
@@ -280,6 +295,9 @@ impl I2c for SimBus {
         let index = self.transactions();
         let result = self.run(address, operations);
         let mut s = self.0.borrow_mut();
+        if result.is_err() {
+            s.failures = s.failures.wrapping_add(1);
+        }
         if s.logging {
             let ops = operations
                 .iter()
