@@ -14,8 +14,15 @@ use paperbot::model::estimator::{Estimator, Update};
 use paperbot::model::measurement::{expected_heading, expected_lidar, Arena, LidarId};
 use paperbot::model::{Motion, Pose};
 
-/// Most instructions one control tick (no I/O) may take.
+/// Most instructions one control tick without I/O may take (issue 6): the
+/// tick's own work (state update and estimator prediction, sensor servicing
+/// with readings already in hand, at most
+/// `config::timing::MAX_CORRECTIONS_PER_TICK` corrections, deadman, servo
+/// commands), not the formatting of a telemetry row for the UART, which is
+/// reported separately.
 pub const TICK_MAX: u32 = 3_000;
+/// Corrections one tick applies when all three sensors have a fresh reading.
+const CORRECTIONS: u32 = paperbot::config::timing::MAX_CORRECTIONS_PER_TICK as u32;
 
 /// Poses the estimator is counted at: mid-arena, beams square enough on
 /// their walls and clear of corners (so the lidar corrections are accepted:
@@ -197,7 +204,7 @@ pub fn tick_rows() -> ([TickRow; 4], u32) {
                         let acc = |s: paperbot::model::estimator::EstimatorStats| {
                             s.front.accepted + s.right.accepted + s.compass.accepted
                         };
-                        if acc(after) != acc(before) + 3 {
+                        if acc(after) != acc(before) + CORRECTIONS {
                             not_accepted += 1;
                         }
                     }
@@ -209,7 +216,10 @@ pub fn tick_rows() -> ([TickRow; 4], u32) {
     };
     let rows = [
         TickRow { name: "tick: no fresh reading, no telemetry", counts: case(false, false) },
-        TickRow { name: "tick: fresh lidar x2 + compass (3 corrections)", counts: case(true, false) },
+        TickRow {
+            name: "tick: fresh lidar x2 + compass (MAX_CORRECTIONS_PER_TICK = 1 correction, the others wait)",
+            counts: case(true, false),
+        },
         TickRow { name: "tick: telemetry row into a discarding sink", counts: case(false, true) },
         TickRow { name: "tick: fresh readings + telemetry row (worst case)", counts: case(true, true) },
     ];
@@ -292,7 +302,7 @@ pub fn run() -> (u32, u32) {
         println!("| {} | {} | {} | {} | {} |", r.name, r.counts[0], r.counts[1], r.counts[2], r.worst());
     }
     if not_accepted > 0 {
-        println!("      WARNING: {} measured ticks did not accept all 3 readings", not_accepted);
+        println!("      WARNING: {} measured ticks did not accept {} reading(s)", not_accepted, CORRECTIONS);
     }
     for (name, n, _) in est.iter().chain(&helpers) {
         println!("BENCH {} {}", name, n);
@@ -302,14 +312,17 @@ pub fn run() -> (u32, u32) {
             println!("BENCH {} [{}] {}", r.name, m, n);
         }
     }
-    let worst = ticks.iter().map(TickRow::worst).max().unwrap_or(0);
+    // the first two rows are the tick without I/O; the last two add a telemetry row
+    let worst = ticks.iter().take(2).map(TickRow::worst).max().unwrap_or(0);
+    let with_row = ticks.iter().map(TickRow::worst).max().unwrap_or(0);
     let ok = worst <= TICK_MAX && not_accepted == 0;
     println!(
-        "test bar::tick_worst: {} <= {} instructions (fresh readings + telemetry, all corrections accepted) ... {}",
+        "test bar::tick_without_io: {} <= {} instructions (fresh readings, correction accepted) ... {}",
         worst,
         TICK_MAX,
         if ok { "ok" } else { "FAILED" }
     );
+    println!("      a tick that also formats a telemetry row: {} instructions (no bar; rows go out at 10 Hz)", with_row);
     if ok {
         (1, 0)
     } else {
