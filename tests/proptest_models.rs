@@ -14,15 +14,12 @@ fn model_with_trims(l: i16, r: i16) -> ActuatorModel {
     ActuatorModel { left_trim: Trim(l), right_trim: Trim(r), ..config::actuators::MODEL }
 }
 
-/// Trims (1/256 steps) that keep each servo's neutral outside every
-/// line's measured range: the closest range end is 9 steps from 90
-/// (backward right, 99..111). The protocol accepts up to
-/// `MAX_TRIM_CENTI` (10 steps); past 9 the forward model's ramp
-/// extrapolates beyond the line (see the report to the lead: `trim r 10`
-/// then `servo 0 180` is modelled at 1 m/s), so the bound is checked here
-/// only where the model is defined.
+/// Any trim the protocol accepts (1/256 steps): up to `MAX_TRIM_CENTI`
+/// (10 steps) either way, which puts a neutral inside the backward-right
+/// and clockwise-left ranges (99..111 and 100..111: a +10 trim moves the
+/// stop to 100) and next to others.
 fn trim() -> impl Strategy<Value = i16> {
-    let max = (9 * 256 - 1).min(config::serial::MAX_TRIM_CENTI * 256 / 100) as i16;
+    let max = (config::serial::MAX_TRIM_CENTI * 256 / 100) as i16;
     -max..=max
 }
 
@@ -51,7 +48,7 @@ proptest! {
     #![proptest_config(ProptestConfig { cases: 4000, ..ProptestConfig::default() })]
 
     /// Any request, any trims: the commands stay inside the lines'
-    /// measured ranges, the motion they make by the forward model is the
+    /// measured ranges, past each servo's neutral, the motion they make by the forward model is the
     /// one `drive` reports, of the requested kind, and equal to the request
     /// unless the request was outside what both wheels reach (then
     /// `saturated` says so and the result is at the range's edge).
@@ -59,10 +56,17 @@ proptest! {
     fn drive_inverts_the_forward_model(request in any_motion(), lt in trim(), rt in trim()) {
         let m = model_with_trims(lt, rt);
         let d = m.drive(request);
-        let Some(lines) = m.lines(request.kind()) else {
+        let Some(measured) = m.lines(request.kind()) else {
             prop_assert_eq!(d, m.stop());
             return Ok(());
         };
+        // no trim the protocol accepts moves a stop past a range's far end
+        let lines = m.usable_lines(request.kind()).unwrap();
+        prop_assert!(d.left >= measured.left.min && d.left <= measured.left.max, "{:?}", d);
+        prop_assert!(d.right >= measured.right.min && d.right <= measured.right.max, "{:?}", d);
+        if request.kind() != MotionKind::Stop {
+            prop_assert!(d.left != m.left_neutral() && d.right != m.right_neutral(), "{:?}", d);
+        }
         prop_assert!(d.left >= lines.left.min && d.left <= lines.left.max, "{:?}", d);
         prop_assert!(d.right >= lines.right.min && d.right <= lines.right.max, "{:?}", d);
         // the commands are on the request's side of neutral for each wheel
@@ -85,23 +89,21 @@ proptest! {
     }
 
     /// Any pair of commands, any trims: the forward model gives a motion of
-    /// bounded speed (never more than the fastest line's far end) and a
-    /// stop for the pairs the report did not model.
+    /// bounded speed (never more than the mean of its two lines' values at
+    /// their ranges' far ends: no extrapolation) and a stop for the pairs
+    /// the report did not model.
     #[test]
     fn forward_model_is_total_and_bounded(l in 0u32..=180 * 256, r in 0u32..=180 * 256, lt in trim(), rt in trim()) {
         let m = model_with_trims(lt, rt);
         let (l, r) = (ServoCmd::from_q8(l), ServoCmd::from_q8(r));
         let motion = m.motion_from_commands(l, r);
-        let fastest = [MotionKind::Forward, MotionKind::Backward, MotionKind::Cw, MotionKind::Ccw]
-            .iter()
-            .map(|&k| {
-                let lines = m.lines(k).unwrap();
-                let (_, a) = lines.left.speed_range_q16();
-                let (_, b) = lines.right.speed_range_q16();
-                f64::from(a.max(b)) / 65536.0
-            })
-            .fold(0.0, f64::max);
-        prop_assert!(magnitude(&m, motion) <= fastest + 1e-3, "{:?} {:?} -> {:?}", l, r, motion);
+        if let Some(lines) = m.lines(motion.kind()) {
+            // every line's magnitude grows toward its range's far end
+            let (_, a) = lines.left.speed_range_q16();
+            let (_, b) = lines.right.speed_range_q16();
+            let fastest = (f64::from(a) + f64::from(b)) / 2.0 / 65536.0;
+            prop_assert!(magnitude(&m, motion) <= fastest + 1e-3, "{:?} {:?} -> {:?}", l, r, motion);
+        }
         if l == m.left_neutral() || r == m.right_neutral() {
             prop_assert_eq!(motion, Motion::Stop);
         }

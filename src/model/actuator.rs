@@ -128,29 +128,72 @@ impl WheelLine {
         let (a, b) = (self.line.eval_q16(self.min), self.line.eval_q16(self.max));
         (a.min(b), a.max(b))
     }
+    /// True when the measured range lies above the untrimmed stop (90): the
+    /// side of neutral this wheel turns the line's way on. The lab measured
+    /// every range at trim 0, each wholly on one side of 90.
+    pub fn above_neutral(&self) -> bool {
+        u32::from(self.min.to_q8()) + u32::from(self.max.to_q8()) >= 2 * u32::from(ServoCmd::NEUTRAL.to_q8())
+    }
+    /// The part of the measured range past `neutral` (on the range's side of
+    /// it), where [`WheelLine::speed_at`] is the line: all of it unless a
+    /// trim moves the stop into the range; `None` when the stop is at or
+    /// past the range's far end.
+    pub fn past_neutral(&self, neutral: ServoCmd) -> Option<WheelLine> {
+        let (lo, hi) = (self.min.min(self.max), self.min.max(self.max));
+        let n = neutral.to_q8();
+        // one 1/256 step past neutral: n < hi <= MAX, or n > lo >= 0, so no clamp
+        let (lo, hi) = if self.above_neutral() {
+            if n >= hi.to_q8() {
+                return None;
+            }
+            (lo.max(ServoCmd::from_q8(u32::from(n) + 1)), hi)
+        } else {
+            if n <= lo.to_q8() {
+                return None;
+            }
+            (lo, hi.min(ServoCmd::from_q8(u32::from(n) - 1)))
+        };
+        Some(WheelLine { line: self.line, min: lo, max: hi })
+    }
     /// Speed magnitude (rad/s Q16) at `cmd`, for a wheel whose stop command
-    /// is `neutral`: the line inside the measured range, held at the range's
-    /// far end beyond it, and a straight ramp from 0 at neutral to the
-    /// range's near end between them. The flag is true outside the measured
-    /// range.
+    /// is `neutral`. Going from neutral toward the measured range (the side
+    /// [`WheelLine::above_neutral`] says): 0 at or behind neutral; a straight
+    /// ramp from 0 at neutral to the line's value at the range's near end
+    /// while short of the range; the line inside it; held at the far end's
+    /// value past it. Never above the far end's value (the fastest the lab
+    /// measured), whatever the trim: a neutral next to the near end does not
+    /// steepen the ramp (it only runs from neutral to the near end), and
+    /// with a neutral inside the range the part of it behind neutral gives 0.
+    /// The flag is true where the value is not the line's own (outside the
+    /// measured range, or behind neutral).
     pub fn speed_at(&self, cmd: ServoCmd, neutral: ServoCmd) -> (i32, bool) {
-        if cmd >= self.min && cmd <= self.max {
-            return (self.line.eval_q16(cmd).max(0), false);
-        }
-        let below = cmd < self.min;
-        let near = if neutral < self.min { self.min } else { self.max };
-        let toward_neutral = (below && near == self.min) || (!below && near == self.max);
-        if !toward_neutral {
-            let far = if below { self.min } else { self.max };
-            return (self.line.eval_q16(far).max(0), true);
-        }
-        let span = i32::from(near.to_q8()) - i32::from(neutral.to_q8());
-        let off = i32::from(cmd.to_q8()) - i32::from(neutral.to_q8());
-        if span == 0 || (off != 0 && (off < 0) != (span < 0)) {
-            return (0, true); // on the other side of neutral: this line says nothing
-        }
-        let y_near = i64::from(self.line.eval_q16(near).max(0));
-        ((y_near * i64::from(off)).checked_div(i64::from(span)).unwrap_or(0) as i32, true)
+        let (lo, hi) = (self.min.min(self.max), self.min.max(self.max));
+        let up = self.above_neutral();
+        // how far past neutral a command is, toward the range (1/256 steps,
+        // |.| <= 180 * 256)
+        let past = |c: ServoCmd| {
+            let d = i32::from(c.to_q8()) - i32::from(neutral.to_q8());
+            if up {
+                d
+            } else {
+                -d
+            }
+        };
+        let (near, far) = if up { (lo, hi) } else { (hi, lo) };
+        let (off, to_near, to_far) = (past(cmd), past(near), past(far));
+        let y_far = self.line.eval_q16(far).max(0);
+        let (y, outside) = if off <= 0 {
+            (0, true) // at or behind neutral: this line says nothing
+        } else if off > to_far {
+            (y_far, true)
+        } else if off >= to_near {
+            (self.line.eval_q16(cmd).max(0), false)
+        } else {
+            // 0 < off < to_near: the ramp, below the near end's value
+            let y_near = i64::from(self.line.eval_q16(near).max(0));
+            ((y_near * i64::from(off)).checked_div(i64::from(to_near)).unwrap_or(0) as i32, true)
+        };
+        (y.min(y_far), outside)
     }
 }
 
@@ -240,6 +283,18 @@ impl ActuatorModel {
         }
     }
 
+    /// The lines of `kind` restricted to the commands past each servo's
+    /// neutral ([`WheelLine::past_neutral`]): what [`ActuatorModel::drive`]
+    /// picks commands from. `None` for `Stop`, or when a trim puts a stop
+    /// at or past the far end of its range.
+    pub fn usable_lines(&self, kind: MotionKind) -> Option<MotionLines> {
+        let lines = self.lines(kind)?;
+        Some(MotionLines {
+            left: lines.left.past_neutral(self.left_neutral())?,
+            right: lines.right.past_neutral(self.right_neutral())?,
+        })
+    }
+
     pub fn left_neutral(&self) -> ServoCmd {
         ServoCmd::NEUTRAL.trimmed(self.left_trim)
     }
@@ -265,11 +320,12 @@ impl ActuatorModel {
     }
 
     /// The inverse model: the two servo commands for a requested motion.
-    /// A speed outside what both wheels reach in their measured ranges is
-    /// clamped into it and `saturated` is set: never extrapolated.
+    /// A speed outside what both wheels reach in their measured ranges
+    /// (past their neutrals, [`ActuatorModel::usable_lines`]) is clamped
+    /// into it and `saturated` is set: never extrapolated.
     pub fn drive(&self, request: Motion) -> Drive {
         let kind = request.kind();
-        let Some(lines) = self.lines(kind) else { return self.stop() };
+        let Some(lines) = self.usable_lines(kind) else { return self.stop() };
         let Some((lo, hi)) = lines.common_range_q16() else { return self.stop() };
         let want = match request {
             Motion::Straight(v) => self.wheel_rate_q16(v.abs()),
