@@ -406,6 +406,24 @@ pub mod estimator {
     pub const MAX_VARIANCE_MM2: f64 = 65536.0;
     /// Smallest variance kept, mm^2 (same units): 0.1 mm, 0.02 degrees.
     pub const MIN_VARIANCE_MM2: f64 = 0.01;
+    /// Outliers in a row from one sensor after which the estimator takes the
+    /// sensor's side, readings: it re-inflates the variances that sensor
+    /// reads (compass: the heading's; a lidar: the position's) to
+    /// `MAX_VARIANCE_MM2`, drops their correlations, and uses the reading
+    /// ungated. Without it a wrong estimate further than the gate from the
+    /// truth (a wheel held at a wall for 0.3 s of a turn: 41 degrees)
+    /// rejects every true reading for ever. A good reading fails the
+    /// 3.5-sigma gate with probability 5e-4, so ten in a row do not happen
+    /// by chance, nor from the 1-10 % of corrupted transactions the fault
+    /// tests inject; ten are 0.1 s of compass (100 Hz) and 0.33 s of one
+    /// lidar (30 Hz). Single outliers stay rejected.
+    pub const REACQUIRE_AFTER: u8 = 10;
+    /// The estimate is kept within this distance outside the arena's walls,
+    /// mm: the reference point is on the car, always inside the box, so a
+    /// position further out is known wrong (dead reckoning while the body is
+    /// held at a wall). 50 mm is more than three times the estimator's
+    /// tracking error (15 mm rms), so a tracking estimate never meets it.
+    pub const ARENA_MARGIN: Length = Length::from_mm_f64(50.0);
 }
 
 /// The simulated robot (`sim`, host only; f64 is fine: nothing here reaches

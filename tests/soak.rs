@@ -4,8 +4,9 @@
 //! test build has overflow checks on, so any overflow in the fixed-point
 //! paths (state update, estimator, models, protocol) fails it. Every tick:
 //! the output is well formed, fault counters never go back, no untimed
-//! motion outlives the deadman, the estimate stays in the arena with a
-//! valid covariance; at checkpoints the estimate is near the truth.
+//! motion outlives the deadman, the estimate stays in the arena (within the
+//! estimator's margin) with a valid covariance; at checkpoints the estimate
+//! is near the truth.
 //!
 //! `SOAK_TICKS=n` changes the length (CI runs the default million).
 
@@ -81,42 +82,83 @@ fn a_million_ticks_of_random_commands() {
     let (q50, q90) = (s.error_quantile(0.5), s.error_quantile(0.9));
     println!("soak: {} checkpoints free of walls for 10 s, {stuck_checkpoints} not", s.errors.len());
     println!("soak: their error median {:.1} mm / {:.1} deg, 90 % {:.0} mm / {:.0} deg", q50.0, q50.1, q90.0, q90.1);
-    // Valid, not accurate: a body held at a wall while the loop drives on
-    // (17 % of the ticks here) leaves the estimate off, and the estimator
-    // does not win it back by itself (its gate then refuses the true
-    // readings: see `lost_heading_is_recovered` below); the operator's
-    // `pose` re-localises it. So the bounds are regression bounds, measured
-    // at 885-1006 mm outside and a median free-checkpoint error of 6 mm / 1.6 deg.
-    assert!(s.worst_outside_mm < 1_500.0, "{}", s.worst_outside_mm);
-    assert!(q50.0 < 20.0 && q50.1 < 5.0, "{q50:?}");
+    // A body held at a wall while the loop drives on (17 % of the ticks
+    // here) leaves the estimate off; runs of outliers make the estimator
+    // take the sensors' side (`lost_heading_is_recovered` below) and the
+    // position is kept within `ARENA_MARGIN` of the box. Regression bounds,
+    // about twice the measured: at most 50.0 mm outside (the margin; 885-1006
+    // mm before re-acquisition), free checkpoints' error median 2.4 mm /
+    // 1.1 deg (was 5.5 mm / 1.5 deg), 90 % 19 mm / 6 deg (was 164 mm / 64
+    // deg), worst 214 mm / 16 deg (was 1041 mm / 173 deg: the worst now
+    // follows a `pose` command given while the body moved, with the
+    // initial 100 mm uncertainty).
+    let margin = paperbot::config::estimator::ARENA_MARGIN.to_mm_f64();
+    assert!(s.worst_outside_mm <= margin + 0.01, "{}", s.worst_outside_mm);
+    assert!(q50.0 < 5.0 && q50.1 < 2.5, "{q50:?}");
+    assert!(q90.0 < 40.0 && q90.1 < 12.0, "{q90:?}");
+    assert!(s.worst_error_mm < 450.0 && s.worst_error_deg < 35.0, "{} {}", s.worst_error_mm, s.worst_error_deg);
+    let st = c.estimator().stats();
+    assert!(st.compass.reacquired > 0 && st.front.reacquired > 0 && st.right.reacquired > 0, "{st:?}");
 }
 
-/// The estimator loses a heading it is wrong about by more than its gate
-/// and never wins it back: the robot held still for 0.3 s of a commanded
-/// turn (a wheel against a wall) leaves a 41 degree error that 60 s of
-/// good compass readings at 100 Hz do not correct (every one is rejected
-/// as an outlier). Measured: 41 deg after 0.3 s, 82 after 0.6, 171 after
-/// 1 s; 143 mm after a blocked 1 s straight. Ignored until the estimator
-/// re-acquires after a run of outliers (reported to the lead).
+/// A body held still while the loop drives on (a wheel against a wall)
+/// leaves the estimate far off: 41 degrees after 0.3 s of a commanded turn,
+/// 171 after 1 s, 143 mm after 1 s of a straight. Every true reading is then
+/// further from the estimate than the gate; before re-acquisition the
+/// estimator rejected all of them for ever (60 s of compass readings did
+/// not correct 41 degrees). Now a run of `REACQUIRE_AFTER` outliers from one
+/// sensor re-inflates what it reads and the estimate follows the sensors
+/// back. Measured (seed 3): heading within 5 degrees and position within
+/// 20 mm 0.06-0.36 s after the body is free again (the estimate has partly
+/// come back while still held), and it stays there.
 #[test]
-#[ignore = "known: the estimator's gate locks out a lost heading (no re-acquisition)"]
 fn lost_heading_is_recovered() {
-    let mut robot = SimRobot::new(SimConfig { seed: 3, ..SimConfig::default() });
-    for _ in 0..100 {
-        robot.tick();
+    // (command, ticks held still, the error it leaves: degrees, mm)
+    let cases: [(&str, usize, f64, f64); 4] = [
+        ("cw 1.0 0.3", 32, 20.0, 0.0),
+        ("cw 1.0 0.6", 62, 60.0, 0.0),
+        ("ccw 3.0 1.0", 102, 120.0, 0.0),
+        ("fwd 0.14 1.0", 102, 0.0, 100.0),
+    ];
+    for (cmd, held, min_deg, min_mm) in cases {
+        let mut robot = SimRobot::new(SimConfig { seed: 3, ..SimConfig::default() });
+        for _ in 0..100 {
+            robot.tick();
+        }
+        let truth = robot.truth();
+        robot.send(cmd);
+        for _ in 0..held {
+            robot.tick();
+            robot.set_truth(truth); // stuck: the body does not move
+        }
+        // the state update alone (what the estimate was left with before
+        // re-acquisition) is that far off; the estimate already less
+        let lost = robot.sample();
+        let (deg, mm) = (
+            lost.dead_reckoned.heading_error(&lost.truth).to_degrees().abs(),
+            lost.dead_reckoned.distance(&lost.truth),
+        );
+        assert!(deg >= min_deg && mm >= min_mm, "{cmd}: the body was not held: {deg:.0} deg, {mm:.0} mm");
+        let (e_deg, e_mm) =
+            (lost.estimate.heading_error(&lost.truth).to_degrees().abs(), lost.estimate.distance(&lost.truth));
+        println!("{cmd}: estimate at release {e_deg:.0} deg / {e_mm:.0} mm");
+        // back within 5 degrees and 20 mm, and staying there for 10 s
+        let mut back_at = None;
+        for i in 0..1_000 {
+            robot.tick();
+            let s = robot.sample();
+            let ok =
+                s.estimate.heading_error(&s.truth).to_degrees().abs() < 5.0 && s.estimate.distance(&s.truth) < 20.0;
+            match (ok, back_at) {
+                (true, None) => back_at = Some(i),
+                (false, Some(_)) => back_at = None,
+                _ => {}
+            }
+        }
+        let st = robot.controller().estimator().stats();
+        println!("{cmd} held {held} ticks: lost {deg:.0} deg / {mm:.0} mm, back after {back_at:?} ticks; {st:?}");
+        let back_at = back_at.unwrap_or_else(|| panic!("{cmd}: not recovered in 10 s"));
+        assert!(back_at < 100, "{cmd}: recovered only after {back_at} ticks");
+        assert!(st.compass.reacquired + st.front.reacquired + st.right.reacquired > 0, "{st:?}");
     }
-    let truth = robot.truth();
-    robot.send("cw 1.0 0.3");
-    for _ in 0..32 {
-        robot.tick();
-        robot.set_truth(truth); // stuck: the body does not turn
-    }
-    let lost = robot.sample();
-    assert!(lost.estimate.heading_error(&lost.truth).to_degrees().abs() > 20.0);
-    for _ in 0..6_000 {
-        robot.tick();
-    }
-    let s = robot.sample();
-    let deg = s.estimate.heading_error(&s.truth).to_degrees().abs();
-    assert!(deg < 5.0, "still {deg:.0} deg off after 60 s of compass readings");
 }
