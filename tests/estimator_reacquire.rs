@@ -158,3 +158,21 @@ fn the_position_stays_within_the_margin_of_the_arena() {
     est.reset(Pose::from_mm(-5_000, 9_000, deg(0.0)));
     assert_eq!((est.pose().x.to_mm_f64(), est.pose().y.to_mm_f64()), (-m, wy + m));
 }
+
+/// The integer square roots behind the one-sigma telemetry figures.
+#[test]
+fn integer_square_roots_are_floors() {
+    use paperbot::model::estimator::{isqrt, isqrt64};
+    let mut rng = paperbot::sim::noise::Rng::new(99);
+    let mut xs: Vec<u64> = vec![0, 1, 2, 3, 4, 15, 16, 17, u64::from(u32::MAX), u64::MAX, (1 << 62) - 1, 1 << 62];
+    for _ in 0..100_000 {
+        xs.push(rng.next_u64() >> (rng.next_u64() % 64));
+    }
+    for x in xs {
+        let r = u64::from(isqrt64(x));
+        assert!(r * r <= x && (r + 1).checked_mul(r + 1).is_none_or(|s| s > x), "isqrt64({x}) = {r}");
+        if let Ok(x32) = u32::try_from(x) {
+            assert_eq!(u64::from(isqrt(x32)), r, "isqrt({x32})");
+        }
+    }
+}

@@ -929,43 +929,41 @@ fn shift(v: i32, e: i32) -> i32 {
     }
 }
 
-/// Integer square root (floor), no division: bit by bit, 16 rounds.
-pub fn isqrt(v: u32) -> u32 {
-    let (mut rem, mut root) = (v, 0u32);
-    let mut bit = 1u32 << 30;
-    while bit > rem {
-        bit >>= 2;
-    }
-    while bit != 0 {
-        if rem >= root + bit {
-            rem -= root + bit;
-            root = (root >> 1) + bit;
-        } else {
-            root >>= 1;
+/// Defines an integer square root (floor) over one unsigned type, without
+/// division: bit by bit, one round per result bit.
+macro_rules! isqrt_of {
+    ($(#[$doc:meta])* $name:ident, $t:ty) => {
+        $(#[$doc])*
+        pub fn $name(v: $t) -> u32 {
+            let (mut rem, mut root): ($t, $t) = (v, 0);
+            let mut bit: $t = 1 << (<$t>::BITS - 2);
+            while bit > rem {
+                bit >>= 2;
+            }
+            while bit != 0 {
+                if rem >= root + bit {
+                    rem -= root + bit;
+                    root = (root >> 1) + bit;
+                } else {
+                    root >>= 1;
+                }
+                bit >>= 2;
+            }
+            root as u32 // the root of a u64 is below 2^32
         }
-        bit >>= 2;
-    }
-    root
+    };
 }
 
-/// Integer square root (floor) of a `u64`, no division: bit by bit, 32 rounds.
-pub fn isqrt64(v: u64) -> u32 {
-    let (mut rem, mut root) = (v, 0u64);
-    let mut bit = 1u64 << 62;
-    while bit > rem {
-        bit >>= 2;
-    }
-    while bit != 0 {
-        if rem >= root + bit {
-            rem -= root + bit;
-            root = (root >> 1) + bit;
-        } else {
-            root >>= 1;
-        }
-        bit >>= 2;
-    }
-    root as u32
-}
+isqrt_of!(
+    /// Integer square root (floor) of a `u32`, no division: 16 rounds.
+    isqrt,
+    u32
+);
+isqrt_of!(
+    /// Integer square root (floor) of a `u64`, no division: 32 rounds.
+    isqrt64,
+    u64
+);
 
 /// `a f` for `f` in Q30, where `|a f| < 2^61` (`|f| <= 2^29` for any `a`,
 /// or small operands): `mul_hi` gives Q-2 within 3 LSB below the exact
