@@ -73,7 +73,10 @@ impl<const N: usize> TextOut for OutLine<N> {
         let end = self.len.saturating_add(bytes.len());
         if let Some(dst) = self.buf.get_mut(self.len..end) {
             if bytes.is_ascii() {
-                dst.copy_from_slice(bytes);
+                // a zip, not copy_from_slice: no length-mismatch panic path
+                for (d, &b) in dst.iter_mut().zip(bytes) {
+                    *d = b;
+                }
                 self.len = end;
                 return Ok(());
             }
