@@ -145,7 +145,7 @@ fi
 
 if (( fail )); then echo "run.sh: FAILED"; exit 1; fi
 if (( bars_over )); then
-  echo "run.sh: OK (tests pass; $bars_over bar(s) over, advisory: LX106_BARS=advisory)"
+  echo "run.sh: OK (tests pass; $bars_over bar(s) over and advisory: LX106_BARS=${LX106_BARS:-} LX106_ADVISORY_BARS=${LX106_ADVISORY_BARS:-})"
 else
   echo "run.sh: OK"
 fi
