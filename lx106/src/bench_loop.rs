@@ -123,9 +123,9 @@ pub fn estimator_rows() -> [Row; 9] {
         ("estimator: predict Straight, steady state", predict("Straight", true), "pose's sin/cos cache current"),
         ("estimator: predict Turn, steady state", predict("Turn", true), "pose's sin/cos cache current"),
         ("estimator: predict Straight, heading just set from outside", predict("Straight", false), "cold cache"),
-        ("estimator: update_lidar front (accepted)", front, "incl. Beam (sin_cos x2), one i64 division"),
+        ("estimator: update_lidar front (accepted)", front, "incl. the beam geometry; no division (Newton reciprocal)"),
         ("estimator: update_lidar right (accepted)", right, ""),
-        ("estimator: update_heading (accepted)", heading, "one i64 division"),
+        ("estimator: update_heading (accepted)", heading, "no division"),
         ("measurement: expected_lidar front", exp_lidar, "Beam + one i64 division (not on the tick's path)"),
         ("measurement: expected_heading", exp_heading, ""),
     ]

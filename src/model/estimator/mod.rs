@@ -655,8 +655,10 @@ impl Estimator {
     /// The scalar Kalman correction for innovation `nu` (Q16 mm), row `h`,
     /// noise `r` (Q14 mm^2, > 0), gated unless re-acquiring. All 32-bit but
     /// the state update's three products (see the module docs, "Arithmetic
-    /// of a correction").
-    #[inline(always)]
+    /// of a correction"). One copy for the three callers (gated lidar and
+    /// compass, ungated re-acquisition): the call costs a few instructions,
+    /// three inlined copies cost kilobytes of flash.
+    #[inline(never)]
     fn correct(&mut self, h: Row, nu: i32, r: i32, gate: Gate) -> Update {
         // b = P H^T and H P H^T, scaled by 2^-k (Q(14 - k) mm^2).
         let (b, hph, k) = project(&self.p, h);
