@@ -131,15 +131,20 @@ impl Servos for FakeServos {
 
 type Ctl = Controller<FakeLidar, FakeLidar, FakeCompass, FakeServos>;
 
-/// A loop at the origin, telemetry off, and its output.
-fn setup() -> (Ctl, Lines) {
-    let mut ctl = Controller::new(
+/// A loop at the origin over working test doubles, as configured.
+fn fresh() -> Ctl {
+    Controller::new(
         FakeLidar::default(),
         FakeLidar::default(),
         FakeCompass::default(),
         FakeServos::default(),
         Pose::default(),
-    );
+    )
+}
+
+/// A loop at the origin, telemetry off, and its output.
+fn setup() -> (Ctl, Lines) {
+    let mut ctl = fresh();
     let mut out = Lines::default();
     send(&mut ctl, &mut out, "rate 0");
     out.take();
@@ -379,13 +384,7 @@ fn telemetry_rows_come_at_the_set_rate_after_one_header() {
 
 #[test]
 fn default_rate_is_the_config_rate() {
-    let mut ctl = Controller::new(
-        FakeLidar::default(),
-        FakeLidar::default(),
-        FakeCompass::default(),
-        FakeServos::default(),
-        Pose::default(),
-    );
+    let mut ctl = fresh();
     let mut out = Lines::default();
     run(&mut ctl, &mut out, 0, 1000);
     let lines = out.take();

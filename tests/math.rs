@@ -68,7 +68,8 @@ fn lengths_coords_and_steps() {
     assert_eq!(Length::from_mm(100_000), Length::MAX, "saturates past 32 m");
     assert_eq!(Coord::from_length(Length::from_mm(-7)).to_length(), Length::from_mm(-7));
     assert_eq!(Coord(i64::MAX).to_length(), Length::MAX);
-    assert_eq!(Coord(i64::MAX).add_q22(5), Coord(i64::MAX), "saturates");
+    assert_eq!(Coord(7 << 10).add_q22(-7), Coord(0), "a Q22 step is 2^10 Coord units");
+    assert_eq!(Coord(i64::MAX).add_q22(1), Coord(i64::MIN + 1023), "wraps (2147 km out), never panics");
     assert_eq!(Dt::from_micros(65_536), Err(paperbot::math::DtTooLong));
     assert_eq!(Dt::from_micros_saturating(1_000_000), Dt::MAX);
 }

@@ -135,14 +135,7 @@ fn widest_row_is_max_row() {
         mag_raw: Some([i16::MIN; 3]),
         mag_field: Some([-(1 << 24); 3]),
         compass_mdeg: Some(359_999),
-        faults: FaultCounters {
-            bus: u32::MAX,
-            timeout: u32::MAX,
-            missing: u32::MAX,
-            bad_sample: u32::MAX,
-            rejected_outliers: u32::MAX,
-            overruns: u32::MAX,
-        },
+        faults: max_faults(),
     };
     let mut out: String<MAX_ROW> = String::new();
     format_row(&row, &mut out).expect("fits");
@@ -342,14 +335,7 @@ fn status_line() {
         front_ok: false,
         right_ok: false,
         compass_ok: false,
-        faults: FaultCounters {
-            bus: u32::MAX,
-            timeout: u32::MAX,
-            missing: u32::MAX,
-            bad_sample: u32::MAX,
-            rejected_outliers: u32::MAX,
-            overruns: u32::MAX,
-        },
+        faults: max_faults(),
     };
     let mut out: String<MAX_STATUS> = String::new();
     format_status(&wide, &mut out).expect("fits");
@@ -532,5 +518,17 @@ fn protocol_source_has_no_float_and_no_fmt() {
         for banned in ["f32", "f64", "core::fmt", "fmt::", "write!", "format!", "format_args", "as_f", "{:"] {
             assert!(!src.contains(banned), "{} contains {banned:?}", path.display());
         }
+    }
+}
+
+/// Every fault counter at its largest value (the widest row and status).
+fn max_faults() -> FaultCounters {
+    FaultCounters {
+        bus: u32::MAX,
+        timeout: u32::MAX,
+        missing: u32::MAX,
+        bad_sample: u32::MAX,
+        rejected_outliers: u32::MAX,
+        overruns: u32::MAX,
     }
 }

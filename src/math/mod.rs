@@ -213,13 +213,13 @@ impl Coord {
         self.0 as f64 / 4_294_967_296.0
     }
     /// Adds a step in units of 2^-22 mm (what [`mul_hi`] of a Q24 length and
-    /// a Q30 sine gives).
+    /// a Q30 sine gives). Wrapping: a coordinate wraps only after 2^31 mm =
+    /// 2147 km of travel in one direction (days of driving at the robot's top
+    /// speed), and a saturating i64 add costs 20 lx106 instructions where
+    /// this costs 4.
     #[inline(always)]
     pub fn add_q22(self, step: i32) -> Coord {
-        Coord(self.0.saturating_add(i64::from(step) << 10))
-    }
-    pub fn saturating_add_length(self, l: Length) -> Coord {
-        Coord(self.0.saturating_add(i64::from(l.0) << 16))
+        Coord(self.0.wrapping_add(i64::from(step) << 10))
     }
 }
 

@@ -102,15 +102,6 @@ impl Pose {
 /// `D` in Q24 mm (the config asserts it is below 128 mm, so it fits).
 const D_Q24: i32 = config::geometry::ROTATION_TO_REFERENCE.0 << 8;
 
-/// Adds a step in units of 2^(-32 + shift) mm. Wrapping: a coordinate wraps
-/// only after 2^31 mm = 2147 km of travel in one direction (days of driving
-/// at the robot's top speed), and a saturating i64 add costs 20 lx106
-/// instructions where this costs 4.
-#[inline(always)]
-fn add_scaled(c: Coord, step: i32, shift: u32) -> Coord {
-    Coord(c.0.wrapping_add(i64::from(step) << shift))
-}
-
 /// Advances `pose` in place by `motion` held for `dt`: the robot's path.
 #[inline(never)]
 pub fn advance(pose: &mut Pose, motion: Motion, dt: Dt) {
@@ -120,8 +111,8 @@ pub fn advance(pose: &mut Pose, motion: Motion, dt: Dt) {
             let d = v.distance_q24(dt); // Q24 mm, |d| < 2^30
             let (s, c) = pose.sin_cos();
             // Q24 * Q30 / 2^32 = Q22
-            pose.x = add_scaled(pose.x, mul_hi(d, c), 10);
-            pose.y = add_scaled(pose.y, mul_hi(d, s), 10);
+            pose.x = pose.x.add_q22(mul_hi(d, c));
+            pose.y = pose.y.add_q22(mul_hi(d, s));
         }
         Motion::Turn(w) => {
             let (rot, frac) = w.rotation(dt);
@@ -132,8 +123,8 @@ pub fn advance(pose: &mut Pose, motion: Motion, dt: Dt) {
             // Q22 differences of values below 2^30: no overflow. The products
             // of one step's new heading are the next step's old ones, so a
             // turn telescopes exactly: no rounding builds up.
-            pose.x = add_scaled(pose.x, t1.d_cos - t0.d_cos, 10);
-            pose.y = add_scaled(pose.y, t1.d_sin - t0.d_sin, 10);
+            pose.x = pose.x.add_q22(t1.d_cos - t0.d_cos);
+            pose.y = pose.y.add_q22(t1.d_sin - t0.d_sin);
             pose.theta = theta;
             pose.theta_frac = f;
             pose.trig = t1;
