@@ -10,9 +10,9 @@
 # fetch-libgcc-src.sh); (3) release build of the suite and the size probes;
 # (4) the suite under QEMU, twice: identical instruction counts, ends with
 # "N passed, N failed" (tests, then the benchmarks' bars: step, tick); (5) the
-# core's .text and static RAM from the size probes, with the bar, and where
-# the bytes go (tools/size_by_file.py); (6) no soft-float routine in the
-# core's paths; (7) where the worst control tick's instructions go (QEMU
+# .text and static RAM of the core and of the firmware stack, the core's bar,
+# and where the bytes go (size.sh); (6) no soft-float routine in the
+# core's paths; (7) where the bar's control tick's instructions go (QEMU
 # instruction trace of src/bin/tick_profile.rs, tools/profile.py).
 #
 # Bars (instruction counts, .text) fail the run. LX106_BARS=advisory makes
@@ -28,8 +28,8 @@ here="$(cd "$(dirname "$0")" && pwd)"
 root="$(dirname "$here")"
 export QEMU_TIMEOUT="${QEMU_TIMEOUT:-120}"
 
-# The core's code (.text + literals, and the runtime helpers it pulls in)
-# must stay under this many bytes.
+# The core's code (core-probe: .text + literals, and the runtime helpers it
+# pulls in) must stay under this many bytes.
 TEXT_MAX=$((24 * 1024))
 
 need() { command -v "$1" >/dev/null || { echo "run.sh: missing $1 ($2)" >&2; exit 2; }; }
@@ -93,33 +93,8 @@ else
   echo "   instruction counts DIFFER between two runs"; fail=1
 fi
 
-echo "== 5. core footprint: size-probe (the core's robot-side entry points) minus size-base"
-sec() { # $1 = ELF, $2 = section: its size in bytes (0 if absent)
-  xtensa-lx106-elf-size -A "$1" | awk -v s="$2" '$1 == s { print $2; f = 1 } END { if (!f) print 0 }'
-}
-d() { echo $(( $(sec "$OUT/size-probe" "$1") - $(sec "$OUT/size-base" "$1") )); }
-text=$(d .text); rodata=$(d .rodata); data=$(d .data); bss=$(d .bss)
-echo "   .text (code + literals, incl. runtime helpers it calls): $text bytes"
-echo "   .rodata (tables, constants; flash on the robot):          $rodata bytes"
-echo "   static RAM .data + .bss:                                  $((data + bss)) bytes"
-echo "   runtime helpers linked for the core (compiler_builtins):"
-xtensa-lx106-elf-nm -S "$OUT/size-probe" | awk '$3 ~ /^[tTwW]$/ && $4 ~ /^__/ { printf "     %-12s 0x%s bytes\n", $4, $2 }' | sort -u
-# Informational: core::panicking entry points linked from the core's paths
-# (signed `/` keeps an overflow check even in release; see BENCHMARKS.md).
-np=$(xtensa-lx106-elf-objdump -d "$OUT/size-probe" | grep -cE 'l32r.*<[^>]*core9panicking' || true)
-echo "   references to core::panicking from the core's paths: $np"
-if (( text < TEXT_MAX )); then
-  echo "test bar::core_text: $text < $TEXT_MAX bytes ... ok"
-else
-  echo "test bar::core_text: $text < $TEXT_MAX bytes ... FAILED"; bar_failed core_text
-fi
-if command -v python3 >/dev/null; then
-  echo "   where the bytes go (tools/size_by_file.py: instructions only, literal pools under _double_vector):"
-  python3 tools/size_by_file.py "$OUT/size-probe" "$OUT/size-base" 20 | sed 's/^/   /'
-else
-  echo "   (python3 missing: no breakdown)"
-fi
-
+echo "== 5. footprint: the core (core-probe) and the firmware stack (size-probe), each minus size-base"
+bash ./size.sh --no-build --bar "$TEXT_MAX" || bar_failed core_text
 echo "== 6. no soft-float in the core's paths (size-probe links every one of them)"
 # float routines of libgcc/compiler_builtins: add/sub/mul/div/neg/compare/
 # conversions on sf (f32), df (f64), tf; and libm entry points
@@ -133,7 +108,7 @@ else
   echo "test bar::core_no_soft_float ... FAILED"; fail=1
 fi
 
-echo "== 7. the worst control tick, instruction by instruction (QEMU -singlestep trace, tools/profile.py)"
+echo "== 7. the bar's control tick (one correction, no row), instruction by instruction (QEMU -singlestep trace, tools/profile.py)"
 if command -v python3 >/dev/null; then
   qemu-system-xtensa -M sim -cpu lx106 -nographic -monitor none -semihosting -singlestep \
     -d exec,nochain -D "$LOG/tick-trace.log" -kernel "$OUT/tick-profile" | sed 's/^/   /'

@@ -156,13 +156,14 @@ fn fresh(c: &mut ScriptController, rng: &mut Rng) {
     c.compass().next = Some(Ok(compass_sample(h, rng)));
 }
 
-/// The worst tick's controller (driving straight, telemetry every tick,
-/// fresh readings from all three sensors) and the `now_us` to tick it at
-/// (for `src/bin/tick_profile.rs`).
+/// A controller turning in place with fresh readings from all three
+/// sensors (the bar's tick: one correction), with a telemetry row this tick
+/// when `row`, and the `now_us` to tick it at (for `src/bin/tick_profile.rs`).
 #[allow(dead_code)] // used by src/bin/tick_profile.rs
-pub fn worst_tick_setup(p: Pose) -> (ScriptController, u32) {
+pub fn worst_tick_setup(p: Pose, row: bool) -> (ScriptController, u32) {
     let mut now = 0x1000u32;
-    let mut c = ready(&p, b"fwd 0.13\n", b"rate 100\n", &mut now);
+    let rate: &[u8] = if row { b"rate 100\n" } else { b"rate 0\n" };
+    let mut c = ready(&p, b"cw 2.5\n", rate, &mut now);
     fresh(&mut c, &mut Rng(0x7ec4_0001));
     (c, now)
 }

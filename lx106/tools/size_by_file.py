@@ -19,11 +19,11 @@ import subprocess
 import sys
 from collections import Counter
 
-OWN = re.compile(r"\b(paperbot|size_probe|vl53l0x|mpu9250|embedded_hal_bus)::")
+OWN = re.compile(r"\b(paperbot|size_probe|core_probe|vl53l0x|mpu9250|embedded_hal_bus)::")
 
 
 def module(fn):
-    m = re.search(r"\b(paperbot|size_probe|vl53l0x|mpu9250|embedded_hal_bus|compiler_builtins|core|heapless)((::[a-z_0-9]+)*)", fn)
+    m = re.search(r"\b(paperbot|size_probe|core_probe|vl53l0x|mpu9250|embedded_hal_bus|compiler_builtins|core|heapless)((::[a-z_0-9]+)*)", fn)
     if not m:
         return "(runtime: " + fn[:40] + ")"
     parts = (m.group(1) + m.group(2)).split("::")
