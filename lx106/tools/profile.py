@@ -99,7 +99,7 @@ for f, n in incl.most_common(top):
     print(f"| `{short(f)}` | {n} | {self_c[f]} | {calls[f]} |")
 
 # the runtime helpers (no multiply-high, no divide on the lx106): who calls them
-helpers = [f for f in incl if f.startswith("__")]
+helpers = [f for f in incl if f.startswith("__") or f == "memcpy" or f == "memset"]
 if helpers:
     print()
     print("| runtime helper | called from | calls | instructions (at its average) |")

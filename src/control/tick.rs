@@ -189,10 +189,10 @@ pub struct Controller<F, R, C, S> {
     telemetry_period_us: u64,
     next_telemetry_us: u64,
     header_due: bool,
-    /// Fresh readings since the last telemetry row.
-    fresh_front: Option<LidarSample>,
-    fresh_right: Option<LidarSample>,
-    fresh_compass: Option<CompassSample>,
+    /// A reading came since the last telemetry row (it is in `last_*`).
+    fresh_front: bool,
+    fresh_right: bool,
+    fresh_compass: bool,
     /// Readings waiting for their estimator correction (see
     /// `config::timing::MAX_CORRECTIONS_PER_TICK`).
     pending_front: Option<Length>,
@@ -263,9 +263,9 @@ where
             telemetry_period_us: 0,
             next_telemetry_us: 0,
             header_due: false,
-            fresh_front: None,
-            fresh_right: None,
-            fresh_compass: None,
+            fresh_front: false,
+            fresh_right: false,
+            fresh_compass: false,
             pending_front: None,
             pending_right: None,
             pending_heading: None,
@@ -478,26 +478,47 @@ where
 
     fn sense(&mut self, now: u64) {
         self.reinit_ran = false;
-        if let Some(Reading::Lidar(s)) = self.service(Which::Front, now) {
-            self.fresh_front = Some(s);
-            self.last_front = Some(s);
-            if let Range::Target(d) = s.range {
-                self.pending_front = Some(d);
+        // Each sample is stored once, where it is kept (`last_*`; `fresh_*`
+        // flag it for the next row): at opt-level "z" a copy of a
+        // `CompassSample` is a `memcpy` call.
+        if self.ready(Which::Front, now) {
+            match self.front.poll() {
+                Ok(s) => {
+                    self.sampled(Which::Front, now);
+                    self.fresh_front = true;
+                    self.last_front = Some(s);
+                    if let Range::Target(d) = s.range {
+                        self.pending_front = Some(d);
+                    }
+                }
+                Err(e) => self.missed(Which::Front, e, now),
             }
         }
-        if let Some(Reading::Lidar(s)) = self.service(Which::Right, now) {
-            self.fresh_right = Some(s);
-            self.last_right = Some(s);
-            if let Range::Target(d) = s.range {
-                self.pending_right = Some(d);
+        if self.ready(Which::Right, now) {
+            match self.right.poll() {
+                Ok(s) => {
+                    self.sampled(Which::Right, now);
+                    self.fresh_right = true;
+                    self.last_right = Some(s);
+                    if let Range::Target(d) = s.range {
+                        self.pending_right = Some(d);
+                    }
+                }
+                Err(e) => self.missed(Which::Right, e, now),
             }
         }
-        if let Some(Reading::Compass(s)) = self.service(Which::Compass, now) {
-            self.fresh_compass = Some(s);
-            self.last_compass = Some(s);
-            self.pending_heading = Some(s.heading);
-            if let Some(cal) = self.calibrator.as_mut() {
-                self.calibration_done = cal.feed(s.raw) == CalStatus::Done;
+        if self.ready(Which::Compass, now) {
+            match self.compass.poll() {
+                Ok(s) => {
+                    self.sampled(Which::Compass, now);
+                    self.fresh_compass = true;
+                    self.pending_heading = Some(s.heading);
+                    if let Some(cal) = self.calibrator.as_mut() {
+                        self.calibration_done = cal.feed(s.raw) == CalStatus::Done;
+                    }
+                    self.last_compass = Some(s);
+                }
+                Err(e) => self.missed(Which::Compass, e, now),
             }
         }
     }
@@ -529,56 +550,56 @@ where
         }
     }
 
-    /// Polls one sensor (or re-initialises it when its back-off is over and
-    /// no other sensor was re-initialised in this tick: a bring-up blocks
-    /// the loop, so one per tick keeps a tick's cost to one bring-up).
-    fn service(&mut self, which: Which, now: u64) -> Option<Reading> {
-        let health = *self.health(which);
-        if !health.up {
-            if now < health.retry_at_us || self.reinit_ran {
-                return None;
-            }
-            self.reinit_ran = true;
-            let result = match which {
-                Which::Front => self.front.reinit(),
-                Which::Right => self.right.reinit(),
-                Which::Compass => self.compass.reinit(),
-            };
-            match result {
-                Ok(()) => {
-                    let h = self.health_mut(which);
-                    h.up = true;
-                    h.reinits = h.reinits.saturating_add(1);
-                    h.consecutive_bus_errors = 0;
-                    h.last_sample_us = now;
-                }
-                Err(e) => self.fail(which, e, now),
-            }
-            return None;
+    /// True when a sensor is up, to be polled. A sensor that is down is
+    /// re-initialised when its back-off is over and no other sensor was
+    /// re-initialised in this tick (a bring-up blocks the loop, so one per
+    /// tick keeps a tick's cost to one bring-up); it is polled from the
+    /// next tick on.
+    fn ready(&mut self, which: Which, now: u64) -> bool {
+        let health = self.health(which);
+        if health.up {
+            return true;
         }
-        let polled = match which {
-            Which::Front => self.front.poll().map(Reading::Lidar),
-            Which::Right => self.right.poll().map(Reading::Lidar),
-            Which::Compass => self.compass.poll().map(Reading::Compass),
+        if now < health.retry_at_us || self.reinit_ran {
+            return false;
+        }
+        self.reinit_ran = true;
+        let result = match which {
+            Which::Front => self.front.reinit(),
+            Which::Right => self.right.reinit(),
+            Which::Compass => self.compass.reinit(),
         };
-        match polled {
-            Ok(r) => {
+        match result {
+            Ok(()) => {
                 let h = self.health_mut(which);
-                h.last_sample_us = now;
+                h.up = true;
+                h.reinits = h.reinits.saturating_add(1);
                 h.consecutive_bus_errors = 0;
-                Some(r)
+                h.last_sample_us = now;
             }
-            Err(nb::Error::WouldBlock) => {
-                let silent = now.saturating_sub(health.last_sample_us);
+            Err(e) => self.fail(which, e, now),
+        }
+        false
+    }
+
+    /// A sensor delivered a sample at `now`.
+    fn sampled(&mut self, which: Which, now: u64) {
+        let h = self.health_mut(which);
+        h.last_sample_us = now;
+        h.consecutive_bus_errors = 0;
+    }
+
+    /// A poll gave no sample: nothing new yet (a timeout once the sensor
+    /// has been silent too long), or an error.
+    fn missed(&mut self, which: Which, e: nb::Error<SensorError>, now: u64) {
+        match e {
+            nb::Error::WouldBlock => {
+                let silent = now.saturating_sub(self.health(which).last_sample_us);
                 if silent >= ms_to_us(config::timing::SENSOR_SILENT_MS) {
                     self.fail(which, SensorError::Timeout, now);
                 }
-                None
             }
-            Err(nb::Error::Other(e)) => {
-                self.fail(which, e, now);
-                None
-            }
+            nb::Error::Other(e) => self.fail(which, e, now),
         }
     }
 
@@ -732,9 +753,9 @@ where
         let t = Telemetry {
             t_ms: self.t_ms(),
             pose: self.estimator.pose(),
-            front: self.fresh_front.take(),
-            right: self.fresh_right.take(),
-            compass: self.fresh_compass.take(),
+            front: self.last_front.filter(|_| core::mem::take(&mut self.fresh_front)),
+            right: self.last_right.filter(|_| core::mem::take(&mut self.fresh_right)),
+            compass: self.last_compass.filter(|_| core::mem::take(&mut self.fresh_compass)),
             motion: self.applied.motion,
             left_cmd: self.applied.left,
             right_cmd: self.applied.right,
@@ -840,12 +861,6 @@ where
             faults: self.faults,
         }
     }
-}
-
-/// A fresh reading from one of the sensors.
-enum Reading {
-    Lidar(LidarSample),
-    Compass(CompassSample),
 }
 
 const _: () = assert!(config::timing::TELEMETRY_HZ <= config::serial::MAX_TELEMETRY_HZ as u32);

@@ -26,7 +26,7 @@
 mod sin_table;
 mod trig;
 
-pub use trig::{atan2, sin_cos};
+pub use trig::{atan2, sin_cos, sin_cos_inline};
 
 /// High 32 bits of the signed 64-bit product `a * b`, i.e. `(a * b) >> 32`,
 /// from three 16x16 products (lx106: MULL/MUL16, no MULSH). The result is

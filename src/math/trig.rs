@@ -26,6 +26,15 @@ fn table(i: u32) -> i32 {
 /// the dropped terms are below 5e-9.
 #[inline]
 pub fn sin_cos(a: Angle) -> (i32, i32) {
+    sin_cos_inline(a)
+}
+
+/// [`sin_cos`], always inlined: for the state update's turn, the one caller
+/// whose instruction count has a bar (a call there costs more than the
+/// size of one copy is worth; everywhere else `sin_cos` is one out-of-line
+/// copy when the build optimises for size).
+#[inline(always)]
+pub fn sin_cos_inline(a: Angle) -> (i32, i32) {
     let k = a.0.wrapping_add(1 << (SHIFT - 1)) >> SHIFT; // nearest index, 0..1023
     let delta = a.0.wrapping_sub(k << SHIFT) as i32; // [-2^21, 2^21)
     let i = k & 0xFF;

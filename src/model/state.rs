@@ -20,7 +20,7 @@
 //! straight step then needs no `sin_cos` at all and a turn only the new one.
 
 use crate::config;
-use crate::math::{mul_hi, sin_cos, Angle, Coord, Dt, Length};
+use crate::math::{mul_hi, sin_cos, sin_cos_inline, Angle, Coord, Dt, Length};
 use crate::model::actuator::Motion;
 
 /// `sin_cos(at)` and `D` times it, remembered.
@@ -38,7 +38,10 @@ struct Trig {
 impl Trig {
     #[inline(always)]
     fn of(at: Angle) -> Trig {
-        let (sin, cos) = sin_cos(at);
+        Trig::with(at, sin_cos(at))
+    }
+    #[inline(always)]
+    fn with(at: Angle, (sin, cos): (i32, i32)) -> Trig {
         Trig { at, sin, cos, d_sin: mul_hi(D_Q24, sin), d_cos: mul_hi(D_Q24, cos) }
     }
 }
@@ -119,7 +122,8 @@ pub fn advance(pose: &mut Pose, motion: Motion, dt: Dt) {
             let (f, carry) = pose.theta_frac.overflowing_add(frac);
             let theta = pose.theta.wrapping_add(rot).wrapping_add(Angle(u32::from(carry)));
             let t0 = pose.trig();
-            let t1 = Trig::of(theta);
+            // every turn step computes sin/cos: inlined (see `sin_cos_inline`)
+            let t1 = Trig::with(theta, sin_cos_inline(theta));
             // Q22 differences of values below 2^30: no overflow. The products
             // of one step's new heading are the next step's old ones, so a
             // turn telescopes exactly: no rounding builds up.

@@ -406,17 +406,8 @@ impl Estimator {
     #[inline(always)]
     fn keep_in_arena(&mut self) {
         let p = &mut self.pose;
-        let bound = |c: &mut Coord, low: i32, high: i32| {
-            let mm = (c.0 >> 32) as i32; // |c| < 2^63: the high word fits
-            if mm < low {
-                *c = Coord(i64::from(low) << 32);
-            }
-            if mm >= high {
-                *c = Coord(i64::from(high) << 32);
-            }
-        };
-        bound(&mut p.x, self.low_mm, self.high_x_mm);
-        bound(&mut p.y, self.low_mm, self.high_y_mm);
+        clamp_mm(&mut p.x, self.low_mm, self.high_x_mm);
+        clamp_mm(&mut p.y, self.low_mm, self.high_y_mm);
     }
 
     /// Counts of accepted and rejected readings per sensor.
@@ -683,14 +674,9 @@ impl Estimator {
         // |b| < 2^27: sb >= 3
         let sb = normalize(mb).1 - 2;
         // t = beta / S 2^(30 - ns) (|t| < 2^29), rounded toward zero.
-        let t = b.map(|bi| {
-            let m = mul_hi_u(bi.unsigned_abs() << sb, y) as i32;
-            if bi < 0 {
-                -m
-            } else {
-                m
-            }
-        });
+        // (element by element, not `map`: at opt-level "z" a closure per
+        // element is a call, and this is the tick's hottest path)
+        let t = [over_s(b[0], sb, y), over_s(b[1], sb, y), over_s(b[2], sb, y)];
         // K = b / S = t 2^(ns - sb - 30); in Q21: t 2^(ns - sb - 9). For a
         // valid P, |K_i| <= sqrt(P_ii / S) < 2^8; the largest |t| is at
         // least 2^27 - 3, so a shift above 2 means |K| >= 2^9: an invalid P.
@@ -700,7 +686,7 @@ impl Estimator {
             return Update::Outlier;
         }
         // |t| < 2^29, ek <= 2: K fits i32
-        let [kx, ky, kt] = t.map(|ti| shift(ti, ek));
+        let [kx, ky, kt] = [shift(t[0], ek), shift(t[1], ek), shift(t[2], ek)];
         // State: K nu, Q21 * Q16 = Q37 mm -> Coord (Q32); |K|, |nu| <= 2^31,
         // so the exact products are below 2^62.
         self.pose.x = Coord(self.pose.x.0.saturating_add(mul_wide(kx, nu) >> 5));
@@ -714,13 +700,13 @@ impl Estimator {
         // round down (t and beta taken positive, y below 1/S), so less is
         // removed than exact arithmetic would.
         let ep = ns as i32 - 2 * sb as i32 + 2 + k as i32;
-        let [bx, by, bt] = b.map(|bi| bi << sb); // |beta| < 2^30
+        let [bx, by, bt] = [b[0] << sb, b[1] << sb, b[2] << sb]; // |beta| < 2^30
         let [tx, ty, tt] = t;
         let q = &mut self.p;
-        let diag = |ti: i32, bi: i32| shift(mul_hi(ti.abs(), bi.abs()), ep); // |t| < 2^29, |beta| < 2^30
-        q.xx = q.xx.saturating_sub(diag(tx, bx));
-        q.yy = q.yy.saturating_sub(diag(ty, by));
-        q.tt = q.tt.saturating_sub(diag(tt, bt));
+        // |t| < 2^29, |beta| < 2^30
+        q.xx = q.xx.saturating_sub(shift(mul_hi(tx.abs(), bx.abs()), ep));
+        q.yy = q.yy.saturating_sub(shift(mul_hi(ty.abs(), by.abs()), ep));
+        q.tt = q.tt.saturating_sub(shift(mul_hi(tt.abs(), bt.abs()), ep));
         q.xy = q.xy.saturating_sub(shift(mul_hi(tx, by), ep));
         q.xt = q.xt.saturating_sub(shift(mul_hi(tx, bt), ep));
         q.yt = q.yt.saturating_sub(shift(mul_hi(ty, bt), ep));
@@ -752,26 +738,60 @@ impl Estimator {
         p.xx = p.xx.max(P_MIN);
         p.yy = p.yy.max(P_MIN);
         p.tt = p.tt.max(P_MIN);
-        let mut repairs = 0u32;
-        for (pij, pii, pjj) in [(&mut p.xy, p.xx, p.yy), (&mut p.xt, p.xx, p.tt), (&mut p.yt, p.yy, p.tt)] {
-            // |P_ij| <= min(P_ii, P_jj) implies P_ij^2 <= P_ii P_jj: the
-            // exact test (two 64-bit products) only past that.
-            let a = pij.unsigned_abs();
-            if a > pii.min(pjj).unsigned_abs() {
-                // 0 < P_ii, P_jj <= 2^30 (capped and floored above); past
-                // max(P_ii, P_jj) it is a violation without a product, so the
-                // exact test sees |P_ij| <= 2^30 too.
-                let bound = mul_u31(pii.unsigned_abs(), pjj.unsigned_abs());
-                if a > pii.max(pjj).unsigned_abs() || mul_u31(a, a) > bound {
-                    // The smallest change that restores |P_ij| <= sqrt(P_ii P_jj):
-                    // only rounding at a correlation of 1 gets here.
-                    let m = isqrt64(bound).min(i32::MAX as u32) as i32;
-                    *pij = if *pij < 0 { -m } else { m };
-                    repairs += 1;
-                }
-            }
-        }
+        // (three calls, not a loop over an array: at opt-level "z" the
+        // array's iterator is a call per element)
+        let repairs = bound_correlation(&mut p.xy, p.xx, p.yy)
+            + bound_correlation(&mut p.xt, p.xx, p.tt)
+            + bound_correlation(&mut p.yt, p.yy, p.tt);
         self.stats.repairs = self.stats.repairs.saturating_add(repairs);
+    }
+}
+
+/// Keeps `|P_ij| <= sqrt(P_ii P_jj)` (`0 < P_ii, P_jj <= 2^30`, capped and
+/// floored by [`Estimator::condition`]); 1 if it had to change `P_ij`.
+#[inline(always)]
+fn bound_correlation(pij: &mut i32, pii: i32, pjj: i32) -> u32 {
+    // |P_ij| <= min(P_ii, P_jj) implies P_ij^2 <= P_ii P_jj: the exact test
+    // (two 64-bit products) only past that.
+    let a = pij.unsigned_abs();
+    if a <= pii.min(pjj).unsigned_abs() {
+        return 0;
+    }
+    // Past max(P_ii, P_jj) it is a violation without a product, so the
+    // exact test sees |P_ij| <= 2^30 too.
+    let bound = mul_u31(pii.unsigned_abs(), pjj.unsigned_abs());
+    if a > pii.max(pjj).unsigned_abs() || mul_u31(a, a) > bound {
+        // The smallest change that restores |P_ij| <= sqrt(P_ii P_jj): only
+        // rounding at a correlation of 1 gets here.
+        let m = isqrt64(bound).min(i32::MAX as u32) as i32;
+        *pij = if *pij < 0 { -m } else { m };
+        return 1;
+    }
+    0
+}
+
+/// `beta / S` for one entry of `b`: `|b| 2^sb` times `y` (1/S, see
+/// [`reciprocal`]), high word, with `b`'s sign (rounded toward zero).
+#[inline(always)]
+fn over_s(bi: i32, sb: u32, y: u32) -> i32 {
+    let m = mul_hi_u(bi.unsigned_abs() << sb, y) as i32;
+    if bi < 0 {
+        -m
+    } else {
+        m
+    }
+}
+
+/// [`Estimator::keep_in_arena`] for one coordinate: into `[low, high]` mm
+/// by its high word (`|c| < 2^63`: it fits).
+#[inline(always)]
+fn clamp_mm(c: &mut Coord, low: i32, high: i32) {
+    let mm = (c.0 >> 32) as i32;
+    if mm < low {
+        *c = Coord(i64::from(low) << 32);
+    }
+    if mm >= high {
+        *c = Coord(i64::from(high) << 32);
     }
 }
 
@@ -786,6 +806,18 @@ fn mul_u31(a: u32, b: u32) -> u64 {
     let (bh, bl) = (b >> 15, b & 0x7FFF);
     let mid = ah * bl + al * bh;
     (u64::from(ah * bh) << 30) + (u64::from(mid) << 15) + u64::from(al * bl)
+}
+
+/// One entry of `b = theta P_t +- P_axis` (see [`project`]): `ct`, `ca`
+/// from P's heading and `axis` columns, `th8` = theta << 8.
+#[inline(always)]
+fn lidar_b(ct: i32, ca: i32, k: u32, th8: i32, positive: bool) -> i32 {
+    let (tp, ap) = (mul_hi((ct >> k) << 8, th8), ca >> k);
+    if positive {
+        tp + ap
+    } else {
+        tp - ap
+    }
 }
 
 /// Bound on H's heading entry (Q16 per (L rad) mm): `|theta| < 2^19`, a
@@ -804,7 +836,7 @@ fn project(p: &Covariance, h: Row) -> ([i32; 3], i32, u32) {
         None => {
             // H = (0, 0, 1) (the compass): b = P's heading column, H b = P_tt.
             let k = scale_shift(mag(&col_t));
-            let b = col_t.map(|v| v >> k);
+            let b = [col_t[0] >> k, col_t[1] >> k, col_t[2] >> k];
             let hb = b[2];
             (b, hb, k)
         }
@@ -814,12 +846,14 @@ fn project(p: &Covariance, h: Row) -> ([i32; 3], i32, u32) {
             let k = scale_shift(mag(&col_t) | mag(&col_a));
             // |P >> k| < 2^23, so << 8 < 2^31; |theta| < 2^19, << 8 < 2^27:
             // mul_hi gives P theta / 2^16, below 2^26 (+ 3 LSB of rounding).
+            // |b| < 2^26 + 2^23 < 2^27 (element by element: at opt-level "z"
+            // an iterator over the columns is a call per element)
             let th8 = h.theta << 8;
-            let mut b = [0i32; 3];
-            for ((bi, ct), ca) in b.iter_mut().zip(col_t).zip(col_a) {
-                let (tp, ap) = (mul_hi((ct >> k) << 8, th8), ca >> k);
-                *bi = if positive { tp + ap } else { tp - ap }; // |b| < 2^26 + 2^23 < 2^27
-            }
+            let b = [
+                lidar_b(col_t[0], col_a[0], k, th8, positive),
+                lidar_b(col_t[1], col_a[1], k, th8, positive),
+                lidar_b(col_t[2], col_a[2], k, th8, positive),
+            ];
             // H b = +-b_axis + theta b_t / 2^16: b_t << 4 < 2^31, theta << 12
             // < 2^31, the product below 9 2^26; the sum below 81 2^23 < 2^30.
             let ba = if axis == 0 { b[0] } else { b[1] };
