@@ -7,14 +7,10 @@
 use core::hint::black_box as bb;
 use core::ptr::{read_volatile, write_volatile};
 
-use paperbot::config;
-use paperbot::control::protocol::{parse, LineBuffer};
 use paperbot::control::{Controller, LineSink};
 use paperbot::driver::{CompassSample, HeadingSensor, LidarSample, MagCalibrate, RangeSensor, SensorError, Servos};
-use paperbot::math::{atan2, sin_cos, Angle, Dt};
-use paperbot::model::compass::{MagCalibration, MagCounts};
-use paperbot::model::measurement::{expected_heading, expected_lidar, Arena, LidarId};
-use paperbot::model::{step, Motion, Pose, ServoCmd};
+use paperbot::model::compass::MagCalibration;
+use paperbot::model::{Pose, ServoCmd};
 
 const REG_IN: *const u32 = 0x6000_0318 as *const u32;
 const REG_OUT: *mut u32 = 0x6000_0000 as *mut u32;
@@ -79,21 +75,9 @@ pub extern "C" fn rust_main() -> i32 {
     ctl.feed(input() as u8, &mut uart);
     ctl.tick(input(), &mut uart);
     bb(ctl.pose());
-    bb(step(&bb(Pose::default()), bb(Motion::Stop), bb(Dt::MAX)));
-    bb(config::compass::MODEL.heading_from_raw(bb(MagCounts::default()), bb([128; 3])));
-    bb(config::lidar::FRONT.range(bb(0)));
-    bb(config::lidar::RIGHT.range(bb(0)));
-    bb(config::actuators::MODEL.drive(bb(Motion::Stop)));
-    bb(config::actuators::MODEL.motion_from_commands(bb(ServoCmd::NEUTRAL), bb(ServoCmd::NEUTRAL)));
-    bb(sin_cos(bb(Angle::ZERO)));
-    bb(atan2(bb(0), bb(0)));
-    bb(bb(Angle::ZERO).to_signed_millidegrees());
-    bb(parse(bb(b"fwd 0.13 2.5")).is_ok());
-    let mut lb = LineBuffer::new();
-    bb(lb.push(bb(b'x')).is_some());
-    bb(expected_lidar(&Arena::DEFAULT, &bb(Pose::default()), bb(LidarId::Front)));
-    bb(expected_heading(&bb(Pose::default())));
+    models_entry_points();
     0
 }
 
+include!("../probe_models.rs");
 include!("../probe_rt.rs");

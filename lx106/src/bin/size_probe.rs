@@ -22,18 +22,13 @@ use core::ptr::{read_volatile, write_volatile};
 
 use paperbot::board::bitbang_i2c::{BitBangI2c, CycleClock, I2cPins, Timing};
 use paperbot::board::servo_pulse::{Channel, PulseMailbox, PulseScheduler, PulseTimer, ServoPulses};
-use paperbot::config;
-use paperbot::control::protocol::{parse, LineBuffer};
 use paperbot::control::{Controller, LineSink};
 use paperbot::driver::bus::SharedI2c;
 use paperbot::driver::compass::Compass;
 use paperbot::driver::lidar::{bring_up, Lidar};
 use paperbot::driver::servo::ServoPair;
 use paperbot::driver::HeadingSensor;
-use paperbot::math::{atan2, sin_cos, Angle, Dt};
-use paperbot::model::compass::MagCounts;
-use paperbot::model::measurement::{expected_heading, expected_lidar, Arena, LidarId};
-use paperbot::model::{step, Motion, Pose, ServoCmd};
+use paperbot::model::Pose;
 
 /// ESP8266 GPIO_OUT / GPIO_IN, FRC1, UART0 FIFO (register addresses).
 const GPIO_OUT: *mut u32 = 0x6000_0300 as *mut u32;
@@ -153,21 +148,7 @@ pub extern "C" fn rust_main() -> i32 {
     sched.on_alarm(&mut frc1, &mailbox);
     bb(ctl.pose());
 
-    // the models' and protocol's entry points on their own
-    bb(step(&bb(Pose::default()), bb(Motion::Stop), bb(Dt::MAX)));
-    bb(config::compass::MODEL.heading_from_raw(bb(MagCounts::default()), bb([128; 3])));
-    bb(config::lidar::FRONT.range(bb(0)));
-    bb(config::lidar::RIGHT.range(bb(0)));
-    bb(config::actuators::MODEL.drive(bb(Motion::Stop)));
-    bb(config::actuators::MODEL.motion_from_commands(bb(ServoCmd::NEUTRAL), bb(ServoCmd::NEUTRAL)));
-    bb(sin_cos(bb(Angle::ZERO)));
-    bb(atan2(bb(0), bb(0)));
-    bb(bb(Angle::ZERO).to_signed_millidegrees());
-    bb(parse(bb(b"fwd 0.13 2.5")).is_ok());
-    let mut lb = LineBuffer::new();
-    bb(lb.push(bb(b'x')).is_some());
-    bb(expected_lidar(&Arena::DEFAULT, &bb(Pose::default()), bb(LidarId::Front)));
-    bb(expected_heading(&bb(Pose::default())));
+    models_entry_points();
     0
 }
 
@@ -186,4 +167,5 @@ pub unsafe extern "C" fn __atomic_store_4(p: *mut u32, v: u32, _order: i32) {
     unsafe { write_volatile(p, v) }
 }
 
+include!("../probe_models.rs");
 include!("../probe_rt.rs");
