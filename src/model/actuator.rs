@@ -332,9 +332,11 @@ impl ActuatorModel {
             Motion::Turn(w) => w.abs().to_rad_s_q16(),
             Motion::Stop => 0,
         };
-        let y = want.clamp(lo, hi);
+        // max then min, not `clamp`: lo <= hi and min <= max hold by
+        // construction, but `clamp` would link a panic for the other case
+        let y = want.max(lo).min(hi);
         let saturated = y != want;
-        let cmd = |w: &WheelLine| w.line.inverse(y).unwrap_or(w.min).clamp(w.min, w.max);
+        let cmd = |w: &WheelLine| w.line.inverse(y).unwrap_or(w.min).max(w.min).min(w.max);
         let (left, right) = (cmd(&lines.left), cmd(&lines.right));
         let motion = self.motion_of(kind, left, right);
         Drive { left, right, motion, saturated }
