@@ -14,7 +14,7 @@ use crate::vectors::{COMPASS, LIDAR};
 use core::hint::black_box;
 use paperbot::config;
 use paperbot::control::protocol::parse;
-use paperbot::math::{atan2, sin_cos, Angle, Dt, Speed, TurnRate};
+use paperbot::math::{atan2, Angle, Dt, Speed, TurnRate};
 use paperbot::model::compass::MagCounts;
 use paperbot::model::{advance, Motion, ServoCmd};
 
@@ -92,15 +92,7 @@ pub fn core_benches() -> [(&'static str, u32); 9] {
         })
         .max()
         .unwrap_or(0);
-    let sincos = [0u32, 0x1234_5678, 0x9abc_def0, u32::MAX]
-        .iter()
-        .map(|&a| {
-            count(|| {
-                black_box(sin_cos(black_box(Angle(a))));
-            })
-        })
-        .max()
-        .unwrap_or(0);
+    let sincos = crate::bench_trig::sin_cos_instructions();
     let at2 = [(1, 1), (-300, 200), (123_456, -7_654_321), (i32::MAX, 5)]
         .iter()
         .map(|&(y, x)| {

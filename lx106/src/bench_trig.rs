@@ -52,10 +52,10 @@ fn err(got_s: f64, got_c: f64, x: f64) -> f64 {
 
 const COUNT_AT: [u32; 8] = [0, 0x1234_5678, 0x4000_0000, 0x6000_0001, 0x9abc_def0, 0xc000_0000, 0xe000_0000, u32::MAX];
 
-#[inline(never)]
-fn table() -> (u32, f64) {
-    // paperbot: binary angle in, Q2.30 out
-    let n = COUNT_AT
+/// `paperbot::math::sin_cos`'s instructions, worst of [`COUNT_AT`] (also the
+/// `sin_cos` row of `bench::run`'s other core paths).
+pub fn sin_cos_instructions() -> u32 {
+    COUNT_AT
         .iter()
         .map(|&a| {
             count(|| {
@@ -63,7 +63,13 @@ fn table() -> (u32, f64) {
             })
         })
         .max()
-        .unwrap_or(0);
+        .unwrap_or(0)
+}
+
+#[inline(never)]
+fn table() -> (u32, f64) {
+    // paperbot: binary angle in, Q2.30 out
+    let n = sin_cos_instructions();
     let e = angles()
         .map(|a| {
             let (s, c) = sin_cos(Angle(a));
