@@ -9,9 +9,11 @@
 //! (`RefCellDevice`), both lidars' bring-up and the compass's, the servo
 //! pair on the FRC1 pulse mailbox and its interrupt-side scheduler, and the
 //! control loop (`Controller::feed` + `tick`: line buffer, parser, estimator,
-//! deadman, telemetry and responses) writing to a UART FIFO register; plus
-//! the models' entry points a tool might call directly. The "hardware" here
-//! is volatile accesses to the ESP8266's register addresses (never run).
+//! deadman, telemetry and responses) writing to a UART FIFO register. The
+//! drivers apply the lidar and compass models. Library functions only host
+//! tools and the simulator call (`step`, `expected_lidar`, ...) are not
+//! linked, as they are not in the firmware. The "hardware" here is volatile
+//! accesses to the ESP8266's register addresses (never run).
 #![no_std]
 #![no_main]
 
@@ -27,7 +29,7 @@ use paperbot::driver::bus::SharedI2c;
 use paperbot::driver::compass::Compass;
 use paperbot::driver::lidar::{bring_up, Lidar};
 use paperbot::driver::servo::ServoPair;
-use paperbot::driver::HeadingSensor;
+use paperbot::driver::{HeadingSensor, MagCalibrate, RangeSensor, Servos};
 use paperbot::model::Pose;
 
 /// ESP8266 GPIO_OUT / GPIO_IN, FRC1, UART0 FIFO (register addresses).
@@ -136,20 +138,27 @@ pub extern "C" fn rust_main() -> i32 {
     bb(compass.reinit().is_ok());
     let mailbox = PulseMailbox::default();
     let servos = ServoPair::with_config(ServoPulses::new(&mailbox));
-    let mut ctl = Controller::new(front, right, compass, servos, Pose::default());
+    control_loop(Controller::new(front, right, compass, servos, Pose::default()));
+    let mut sched = PulseScheduler::default();
+    let mut frc1 = Frc1;
+    sched.start(&mut frc1);
+    sched.on_alarm(&mut frc1, &mailbox);
+    0
+}
+
+/// The firmware's main loop body. Its own function: inlined into
+/// `rust_main`, the whole stack in one function made LLVM's Xtensa backend
+/// fail ("Cannot scavenge register without an emergency spill slot").
+#[inline(never)]
+fn control_loop<F: RangeSensor, R: RangeSensor, C: HeadingSensor + MagCalibrate, S: Servos>(
+    mut ctl: Controller<F, R, C, S>,
+) {
     let mut uart = Uart;
     for &b in bb(b"fwd 0.13 2.5\n") {
         ctl.feed(bb(b), &mut uart);
     }
     ctl.tick(bb(0), &mut uart);
-    let mut sched = PulseScheduler::default();
-    let mut frc1 = Frc1;
-    sched.start(&mut frc1);
-    sched.on_alarm(&mut frc1, &mailbox);
     bb(ctl.pose());
-
-    models_entry_points();
-    0
 }
 
 /// Upstream LLVM lowers `AtomicU32::load`/`store` (the servo mailbox) on the
@@ -167,5 +176,4 @@ pub unsafe extern "C" fn __atomic_store_4(p: *mut u32, v: u32, _order: i32) {
     unsafe { write_volatile(p, v) }
 }
 
-include!("../probe_models.rs");
 include!("../probe_rt.rs");
