@@ -50,7 +50,7 @@ use crate::control::protocol::{
 };
 use crate::driver::calibration::{CalStatus, CalibrationError, MagCalibrator};
 use crate::driver::{CompassSample, HeadingSensor, LidarSample, MagCalibrate, SensorError, Servos};
-use crate::math::{Angle, Coord, Dt, Length, TurnRate};
+use crate::math::{div_rem_u64, Angle, Coord, Dt, Length, TurnRate};
 use crate::model::compass::MagCalibration;
 use crate::model::estimator::{Estimator, Update};
 use crate::model::measurement::{Arena, LidarId};
@@ -403,7 +403,7 @@ where
         let was_off = self.telemetry_hz == 0;
         self.telemetry_hz = hz;
         // hz = 0 (off) gives period 0
-        self.telemetry_period_us = 1_000_000u64.checked_div(u64::from(hz)).unwrap_or(0);
+        self.telemetry_period_us = div_rem_u64(1_000_000, u64::from(hz)).map_or(0, |(q, _)| q);
         // the first row at the next tick (after the header if telemetry was off)
         self.next_telemetry_us = self.clock_us;
         if hz != 0 && was_off {
@@ -881,7 +881,7 @@ fn whole_ms(us: u64) -> u32 {
         return q; // the first 71 minutes
     }
     if hi > HI_MAX {
-        return (us / 1_000) as u32; // after 1,900 years
+        return div_rem_u64(us, 1_000).map_or(0, |(q, _)| q as u32); // after 1,900 years
     }
     let (q2, _) = div_rem_1000(hi.wrapping_mul(296).wrapping_add(r)); // no wrap: hi <= HI_MAX
     hi.wrapping_mul(4_294_967).wrapping_add(q).wrapping_add(q2) // mod 2^32, as the cast
@@ -892,7 +892,7 @@ fn whole_ms(us: u64) -> u32 {
 fn us_to_ms(us: u64) -> u32 {
     match u32::try_from(us) {
         Ok(us) => div_rem_1000(us).0,
-        Err(_) => u32::try_from(us / 1_000).unwrap_or(u32::MAX),
+        Err(_) => div_rem_u64(us, 1_000).and_then(|(q, _)| u32::try_from(q).ok()).unwrap_or(u32::MAX),
     }
 }
 

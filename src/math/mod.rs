@@ -44,6 +44,24 @@ pub fn mul_hi(a: i32, b: i32) -> i32 {
     hh.wrapping_add(hl).wrapping_add(lh)
 }
 
+/// The high 32 bits of the 64-bit product `a * b`, from four 16 x 16-bit
+/// products (the lx106 has a 32-bit `MULL` but no multiply-high, and a
+/// `u64` product would be a `__muldi3` call).
+#[inline]
+pub fn mul_hi_u32(a: u32, b: u32) -> u32 {
+    let (a1, a0) = (a >> 16, a & 0xFFFF);
+    let (b1, b0) = (b >> 16, b & 0xFFFF);
+    // each factor < 2^16: every partial product < 2^32
+    let lo = a0.wrapping_mul(b0);
+    let m1 = a1.wrapping_mul(b0);
+    let m2 = a0.wrapping_mul(b1);
+    let hi = a1.wrapping_mul(b1);
+    // three terms < 2^16 each: < 2^18
+    let mid = (lo >> 16).wrapping_add(m1 & 0xFFFF).wrapping_add(m2 & 0xFFFF);
+    // the sum is floor(a * b / 2^32) <= (2^32 - 1)^2 / 2^32 < 2^32: no wrap
+    hi.wrapping_add(m1 >> 16).wrapping_add(m2 >> 16).wrapping_add(mid >> 16)
+}
+
 /// The exact signed product `a * b` as an `i64`, from 16-bit partial
 /// products: the low word is one 32-bit multiply (MULL), the high word
 /// three more and a carry. About 25 lx106 instructions inline, against ~55
@@ -88,15 +106,67 @@ pub const fn sat_i32(x: i64) -> i32 {
     }
 }
 
-/// `n / d` rounded to nearest (halves away from zero); `None` when `d == 0`.
-/// Off the per-step path only: lx106 has no divide instruction.
-pub fn div_round(n: i64, d: i64) -> Option<i64> {
+/// `(n / d, n % d)` for `u64`, `None` when `d == 0`: shift-and-subtract
+/// long division, `d` first shifted up to the numerator, so a quotient of
+/// `k` bits takes `2k + 1` short steps.
+///
+/// The lx106 has no divide instruction. compiler_builtins' 64-bit division
+/// costs about 1.2 KB of flash (and its 32-bit one 0.4 KB) for a handful of
+/// cold call sites (commands, `status`, telemetry's clock and turn rate,
+/// the calibration's result), where this is one small loop. Nothing on the
+/// state update's or the estimator's path divides. Every division in the
+/// robot's code goes through here ([`div_i64`], [`div_round`]), so no
+/// division helper is linked.
+#[inline(never)]
+pub fn div_rem_u64(n: u64, d: u64) -> Option<(u64, u64)> {
     if d == 0 {
         return None;
     }
-    let (n2, d2) = (n.saturating_mul(2), d.saturating_mul(2));
-    let q = if (n < 0) == (d < 0) { n2.saturating_add(d) } else { n2.saturating_sub(d) };
-    q.checked_div(d2)
+    let (mut r, mut dd, mut bit) = (n, d, 1u64);
+    // the largest d 2^k <= n (dd <= r / 2, so the shift cannot overflow)
+    while dd <= r >> 1 {
+        dd <<= 1;
+        bit <<= 1;
+    }
+    let mut q = 0;
+    while bit != 0 {
+        if r >= dd {
+            r -= dd; // r >= dd
+            q |= bit;
+        }
+        dd >>= 1;
+        bit >>= 1;
+    }
+    Some((q, r))
+}
+
+/// `n / d` truncated toward zero, as [`i64::checked_div`]: `None` when
+/// `d == 0` or for `i64::MIN / -1` (see [`div_rem_u64`]).
+pub fn div_i64(n: i64, d: i64) -> Option<i64> {
+    let (q, _) = div_rem_u64(n.unsigned_abs(), d.unsigned_abs())?;
+    with_sign(q, (n < 0) != (d < 0))
+}
+
+/// `n / d` rounded to nearest (halves away from zero); `None` when `d == 0`
+/// or the quotient does not fit (`i64::MIN / -1`). Off the per-step path
+/// only (see [`div_rem_u64`]).
+pub fn div_round(n: i64, d: i64) -> Option<i64> {
+    let d_abs = d.unsigned_abs();
+    let (q, r) = div_rem_u64(n.unsigned_abs(), d_abs)?;
+    // the remainder is at least half of |d|: round away from zero (r < |d|,
+    // so neither side wraps; q < 2^63 whenever r > 0)
+    let q = q.wrapping_add(u64::from(r >= d_abs.wrapping_sub(r)));
+    with_sign(q, (n < 0) != (d < 0))
+}
+
+/// A quotient's magnitude with its sign, if it fits an `i64`.
+fn with_sign(q: u64, negative: bool) -> Option<i64> {
+    if negative {
+        // q <= 2^63: -2^63 is i64::MIN
+        (q <= 1 << 63).then(|| (q as i64).wrapping_neg())
+    } else {
+        i64::try_from(q).ok()
+    }
 }
 
 /// Binary angle: `u32` where 2^32 is one full turn, so adding and
@@ -124,13 +194,23 @@ impl Angle {
     /// Exact to the nearest LSB: `2^32 / 360000 = 2^26 / 5625`. Not on the
     /// per-step path (one division).
     pub fn from_millidegrees(mdeg: i32) -> Angle {
-        let m = i64::from(mdeg.rem_euclid(360_000)); // 0..360000
-        Angle(div_round(m << 26, 5625).unwrap_or(0) as u32)
+        // 2^32 / 360_000 = 2^26 / 5625, and 360_000 mdeg is exactly 2^32:
+        // rounding commutes with the wrap (5625 is odd: no ties), so a
+        // negative value needs no rem_euclid. |mdeg| 2^26 < 2^57.
+        Angle(div_round(i64::from(mdeg) << 26, 5625).unwrap_or(0) as u32)
     }
     /// Millidegrees in `0..360_000` (rounded).
     pub fn to_millidegrees(self) -> u32 {
-        // 360000 / 2^32 in Q32 is 360000: the product fits in u64
-        ((u64::from(self.0) * 360_000 + (1 << 31)) >> 32) as u32 % 360_000
+        // round(a 360000 / 2^32) = (a 360000 + 2^31) >> 32: the product's
+        // high word plus the carry of adding 2^31 to its low word. It is
+        // 360_000 only when rounding up just below a full turn: that is 0.
+        let hi = mul_hi_u32(self.0, 360_000);
+        let m = hi.wrapping_add(self.0.wrapping_mul(360_000) >> 31); // <= 360_000
+        if m == 360_000 {
+            0
+        } else {
+            m
+        }
     }
     /// Signed millidegrees in `-180_000..180_000` (rounded).
     pub fn to_signed_millidegrees(self) -> i32 {
@@ -168,7 +248,7 @@ impl Length {
     }
     /// From micrometres (saturating).
     pub fn from_um(um: i32) -> Length {
-        let bits = (i64::from(um) << 16) / 1000;
+        let bits = div_i64(i64::from(um) << 16, 1000).unwrap_or(0);
         Length(sat_i32(bits))
     }
     /// Whole millimetres, rounded to nearest.
@@ -331,14 +411,14 @@ impl TurnRate {
     }
     /// From whole milliradians per second (clamped).
     pub fn from_mrad_s(mrad_s: i32) -> TurnRate {
-        let bits = (i64::from(mrad_s) * Self::PER_RAD_S_Q16) / 1000;
+        let bits = div_i64(i64::from(mrad_s) * Self::PER_RAD_S_Q16, 1000).unwrap_or(0);
         TurnRate::from_bits(sat_i32(bits))
     }
     /// Milliradians per second, rounded.
     pub fn to_mrad_s(self) -> i32 {
         let n = i64::from(self.0) * 1000;
         let half = Self::PER_RAD_S_Q16 / 2;
-        (if n >= 0 { (n + half) / Self::PER_RAD_S_Q16 } else { (n - half) / Self::PER_RAD_S_Q16 }) as i32
+        div_i64(if n >= 0 { n + half } else { n - half }, Self::PER_RAD_S_Q16).unwrap_or(0) as i32
     }
     /// rad/s in Q16, rounded.
     pub fn to_rad_s_q16(self) -> i32 {

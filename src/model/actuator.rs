@@ -12,7 +12,7 @@
 //!   (it is mounted mirrored): forward is left > 90, right < 90 (the data's
 //!   forward-right line `y = -0.146 x + 15.85` falls as the command rises).
 
-use crate::math::{div_round, round_f64, sat_i32, Length, Speed, TurnRate};
+use crate::math::{div_i64, div_round, round_f64, sat_i32, Length, Speed, TurnRate};
 
 /// A servo command in the Arduino `Servo.write()` scale (0..=180, 90 = stop),
 /// with 8 fractional bits, so the inverse model is not rounded to whole steps.
@@ -191,7 +191,7 @@ impl WheelLine {
         } else {
             // 0 < off < to_near: the ramp, below the near end's value
             let y_near = i64::from(self.line.eval_q16(near).max(0));
-            ((y_near * i64::from(off)).checked_div(i64::from(to_near)).unwrap_or(0) as i32, true)
+            (div_i64(y_near * i64::from(off), i64::from(to_near)).unwrap_or(0) as i32, true)
         };
         (y.min(y_far), outside)
     }
@@ -311,7 +311,7 @@ impl ActuatorModel {
     fn wheel_rate_q16(&self, v: Speed) -> i32 {
         let r = i64::from(self.wheel_radius.0.max(1));
         let mm_s_q16 = (i64::from(v.to_bits()) * 1_000_000) >> 16;
-        (mm_s_q16 << 16).checked_div(r).unwrap_or(0).clamp(0, i64::from(i32::MAX)) as i32
+        div_i64(mm_s_q16 << 16, r).unwrap_or(0).clamp(0, i64::from(i32::MAX)) as i32
     }
     /// Car speed for a wheel speed (rad/s Q16).
     fn car_speed(&self, wheel_q16: i32) -> Speed {

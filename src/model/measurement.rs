@@ -262,7 +262,7 @@ impl Beam {
             return None;
         }
         let num = i64::from(self.to_wall.0) << 30;
-        let d = num / i64::from(self.normal);
+        let d = crate::math::div_i64(num, i64::from(self.normal)).unwrap_or(0);
         i32::try_from(d).ok().map(Length)
     }
 

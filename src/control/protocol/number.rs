@@ -8,6 +8,8 @@
 
 use heapless::String;
 
+use crate::math::mul_hi_u32;
+
 use super::Overflow;
 
 /// Where the formatters write: a bounded text buffer. Every formatter takes
@@ -127,24 +129,6 @@ pub fn push_str(out: &mut dyn TextOut, s: &str) -> Result<(), Overflow> {
 /// Appends one ASCII byte (non-ASCII bytes become `?`).
 pub fn push_byte(out: &mut dyn TextOut, b: u8) -> Result<(), Overflow> {
     out.put_byte(b)
-}
-
-/// The high 32 bits of the 64-bit product `a * b`, from four 16 x 16-bit
-/// products (the lx106 has a 32-bit `MULL` but no multiply-high, and a
-/// `u64` product would be a `__muldi3` call).
-#[inline]
-fn mul_hi_u32(a: u32, b: u32) -> u32 {
-    let (a1, a0) = (a >> 16, a & 0xFFFF);
-    let (b1, b0) = (b >> 16, b & 0xFFFF);
-    // each factor < 2^16: every partial product < 2^32
-    let lo = a0.wrapping_mul(b0);
-    let m1 = a1.wrapping_mul(b0);
-    let m2 = a0.wrapping_mul(b1);
-    let hi = a1.wrapping_mul(b1);
-    // three terms < 2^16 each: < 2^18
-    let mid = (lo >> 16).wrapping_add(m1 & 0xFFFF).wrapping_add(m2 & 0xFFFF);
-    // the sum is floor(a * b / 2^32) <= (2^32 - 1)^2 / 2^32 < 2^32: no wrap
-    hi.wrapping_add(m1 >> 16).wrapping_add(m2 >> 16).wrapping_add(mid >> 16)
 }
 
 /// `(v / 10_000, v % 10_000)` for every `u32`, without a division:
