@@ -688,47 +688,22 @@ where
         if matches!(self.mode, Mode::Calibrate { .. }) {
             self.mode = Mode::Idle;
         }
-        // integer formatting (no core::fmt on the robot); a line that does
-        // not fit is cut short, which MAX_OUT_LINE makes impossible here
-        let mut text: OutLine<MAX_OUT_LINE> = OutLine::new();
-        let t = &mut text;
-        let _ = match result {
-            None => push_str(t, "calibration abandoned after ")
-                .and_then(|()| push_u32(t, u32::from(samples)))
-                .and_then(|()| push_str(t, " samples")),
-            Some(Ok(cal)) => {
-                self.compass.set_calibration(cal);
-                let _ = push_str(t, "calibration ok: ")
-                    .and_then(|()| push_u32(t, u32::from(samples)))
-                    .and_then(|()| push_str(t, " samples, "))
-                    .and_then(|()| push_u32(t, u32::from(sectors)))
-                    .and_then(|()| push_str(t, " of 12 sectors; applied. For config::compass:"));
-                self.respond(&Response::Note(t), sink);
-                t.clear();
-                push_config_line(t, &cal)
+        if let Some(Ok(cal)) = result {
+            self.compass.set_calibration(cal);
+        }
+        // Integer formatting (no core::fmt on the robot), straight into the
+        // output line: every text here is printable ASCII, as `Response::Note`
+        // and `Fail` would leave it. A line that does not fit is cut short,
+        // which MAX_OUT_LINE makes impossible here.
+        self.out.clear();
+        if calibration_report(&mut self.out, result, samples, sectors).is_ok() {
+            sink.write_line(&self.out);
+        }
+        if let Some(Ok(cal)) = result {
+            self.out.clear();
+            if push_str(&mut self.out, "# ").and_then(|()| push_config_line(&mut self.out, &cal)).is_ok() {
+                sink.write_line(&self.out);
             }
-            Some(Err(CalibrationError::NotEnoughSamples { have, need })) => push_str(t, "calibration timed out: ")
-                .and_then(|()| push_u32(t, u32::from(have)))
-                .and_then(|()| push_str(t, " of "))
-                .and_then(|()| push_u32(t, u32::from(need)))
-                .and_then(|()| push_str(t, " samples")),
-            Some(Err(CalibrationError::SweepIncomplete { sectors, need })) => {
-                push_str(t, "calibration failed: the turn covered ")
-                    .and_then(|()| push_u32(t, u32::from(sectors)))
-                    .and_then(|()| push_str(t, " of 12 sectors, need "))
-                    .and_then(|()| push_u32(t, u32::from(need)))
-            }
-            Some(Err(CalibrationError::Degenerate { axis })) => push_str(t, "calibration failed: magnetometer axis ")
-                .and_then(|()| push_u32(t, u32::from(axis)))
-                .and_then(|()| push_str(t, " never changed")),
-        };
-        let response = match result {
-            Some(Ok(_)) | None => Response::Note(&text),
-            Some(Err(_)) => Response::Fail(&text),
-        };
-        let mut out: OutLine<MAX_OUT_LINE> = OutLine::new();
-        if format_response(&response, &mut out).is_ok() {
-            sink.write_line(&out);
         }
     }
 
@@ -907,6 +882,48 @@ fn q16_to_micro(a: u32) -> u32 {
     }
     // h <= H_MAX: 15625 h fits
     h.wrapping_mul(15_625).saturating_add(l.wrapping_mul(15_625).wrapping_add(1 << 9) >> 10)
+}
+
+/// The answer line to a calibration sweep's end: `# ...` for a result (or
+/// an abandoned sweep), `# err ...` for a failure.
+fn calibration_report(
+    t: &mut dyn TextOut,
+    result: Option<Result<MagCalibration, CalibrationError>>,
+    samples: u16,
+    sectors: u8,
+) -> Result<(), Overflow> {
+    match result {
+        None => {
+            push_str(t, "# calibration abandoned after ")?;
+            push_u32(t, u32::from(samples))?;
+            push_str(t, " samples")
+        }
+        Some(Ok(_)) => {
+            push_str(t, "# calibration ok: ")?;
+            push_u32(t, u32::from(samples))?;
+            push_str(t, " samples, ")?;
+            push_u32(t, u32::from(sectors))?;
+            push_str(t, " of 12 sectors; applied. For config::compass:")
+        }
+        Some(Err(CalibrationError::NotEnoughSamples { have, need })) => {
+            push_str(t, "# err calibration timed out: ")?;
+            push_u32(t, u32::from(have))?;
+            push_str(t, " of ")?;
+            push_u32(t, u32::from(need))?;
+            push_str(t, " samples")
+        }
+        Some(Err(CalibrationError::SweepIncomplete { sectors, need })) => {
+            push_str(t, "# err calibration failed: the turn covered ")?;
+            push_u32(t, u32::from(sectors))?;
+            push_str(t, " of 12 sectors, need ")?;
+            push_u32(t, u32::from(need))
+        }
+        Some(Err(CalibrationError::Degenerate { axis })) => {
+            push_str(t, "# err calibration failed: magnetometer axis ")?;
+            push_u32(t, u32::from(axis))?;
+            push_str(t, " never changed")
+        }
+    }
 }
 
 /// The `CALIBRATION` line of `config::compass` for `cal`, ready to paste

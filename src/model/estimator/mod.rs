@@ -403,7 +403,7 @@ impl Estimator {
     /// coordinate's high word only (its floor in mm, Coord being Q32): two
     /// 32-bit compares per axis, the 64-bit stores only when out of bounds.
     /// (For an arena of negative size the upper bound wins: no panic.)
-    #[inline(always)]
+    #[inline(never)]
     fn keep_in_arena(&mut self) {
         let p = &mut self.pose;
         clamp_mm(&mut p.x, self.low_mm, self.high_x_mm);
@@ -753,10 +753,17 @@ impl Estimator {
 fn bound_correlation(pij: &mut i32, pii: i32, pjj: i32) -> u32 {
     // |P_ij| <= min(P_ii, P_jj) implies P_ij^2 <= P_ii P_jj: the exact test
     // (two 64-bit products) only past that.
-    let a = pij.unsigned_abs();
-    if a <= pii.min(pjj).unsigned_abs() {
+    if pij.unsigned_abs() <= pii.min(pjj).unsigned_abs() {
         return 0;
     }
+    bound_correlation_exact(pij, pii, pjj)
+}
+
+/// [`bound_correlation`] past its quick test, out of line (a correlation
+/// above `min(P_ii, P_jj) / sqrt(P_ii P_jj)`: rare in steady state).
+#[inline(never)]
+fn bound_correlation_exact(pij: &mut i32, pii: i32, pjj: i32) -> u32 {
+    let a = pij.unsigned_abs();
     // Past max(P_ii, P_jj) it is a violation without a product, so the
     // exact test sees |P_ij| <= 2^30 too.
     let bound = mul_u31(pii.unsigned_abs(), pjj.unsigned_abs());
@@ -1014,7 +1021,7 @@ fn q30(a: i32, f: i32) -> i32 {
 /// i.e. below 1/2). With `|P_ij| <= 2^30` (conditioned): `u` below 1.5 2^30
 /// fits i32; the other sums can pass 2^31 only for a P near its cap, and
 /// saturate.
-#[inline(always)]
+#[inline(never)]
 fn propagate(p: &mut Covariance, f1: i32, f2: i32) {
     // new P_xt = P_xt + f1 P_tt, new P_yt = P_yt + f2 P_tt
     let u1 = p.xt + q30(p.tt, f1);
