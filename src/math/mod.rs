@@ -96,6 +96,7 @@ pub const fn round_f64(x: f64) -> i64 {
 }
 
 /// Saturating `i64 -> i32` (const).
+#[inline(never)]
 pub const fn sat_i32(x: i64) -> i32 {
     if x > i32::MAX as i64 {
         i32::MAX
@@ -285,6 +286,7 @@ impl Coord {
         Coord((l.0 as i64) << 16)
     }
     /// The coordinate as a [`Length`], rounded and saturated to +-32.7 m.
+    #[inline(never)]
     pub fn to_length(self) -> Length {
         let bits = self.0.saturating_add(1 << 15) >> 16;
         Length(sat_i32(bits))
