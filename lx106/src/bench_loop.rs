@@ -127,7 +127,7 @@ pub fn estimator_rows() -> [Row; 9] {
         ("estimator: update_lidar front (accepted)", front, "incl. the beam geometry; no division (Newton reciprocal)"),
         ("estimator: update_lidar right (accepted)", right, ""),
         ("estimator: update_heading (accepted)", heading, "no division"),
-        ("measurement: expected_lidar front", exp_lidar, "Beam + one i64 division (not on the tick's path)"),
+        ("measurement: expected_lidar front", exp_lidar, "Beam + one math::div_i64 (host-side: not in the firmware)"),
         ("measurement: expected_heading", exp_heading, ""),
     ]
 }
@@ -266,7 +266,7 @@ pub fn helper_rows() -> [Row; 7] {
         ("i64 saturating_mul", sat, "overflow test = a 128-bit product"),
         ("i64 checked_mul", checked, ""),
         ("(1 << 44) / i64 (`__divdi3`, worst of 4)", div, ""),
-        ("u32 / 10 (`__udivsi3`)", udiv32, "one per decimal digit"),
+        ("u32 / 10 (`__udivsi3`)", udiv32, "for comparison: the robot's digits are reciprocal multiplies"),
         ("paperbot::math::mul_hi (i32 x i32 -> high 32)", mulhi, "for comparison"),
     ]
 }
