@@ -887,7 +887,7 @@ fn q16_to_micro(a: u32) -> u32 {
 /// The answer line to a calibration sweep's end: `# ...` for a result (or
 /// an abandoned sweep), `# err ...` (the protocol's `ERR`) for a failure.
 /// Each literal carries its prefix: one string per line is 92 bytes less
-/// flash than a separate prefix; `tests/control.rs` pins the lines.
+/// flash than a separate prefix; `tests/control.rs` pins four of the five.
 fn calibration_report(
     t: &mut dyn TextOut,
     result: Option<Result<MagCalibration, CalibrationError>>,
