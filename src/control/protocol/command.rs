@@ -293,15 +293,10 @@ fn number(token: &[u8], f: Field) -> Result<i32, ParseError> {
     }
 }
 
-/// 1/100 command steps to 1/256 steps, rounded (|centi| <= 18_000: no overflow).
+/// 1/100 command steps to 1/256 steps, rounded half away from zero (the
+/// callers' ranges keep |centi| <= 18_000, so |result| <= 46_080).
 fn centi_to_q8(centi: i32) -> i32 {
-    let n = centi.unsigned_abs().saturating_mul(256).saturating_add(50);
-    let q8 = crate::math::div_rem_u64(u64::from(n), 100).map_or(0, |(q, _)| q as i32); // <= 46_080
-    if centi < 0 {
-        q8.wrapping_neg()
-    } else {
-        q8
-    }
+    crate::math::div_round(i64::from(centi) << 8, 100).map_or(0, |q8| q8 as i32)
 }
 
 /// 1/256 command steps to 1/100 steps, rounded half away from zero.
