@@ -862,12 +862,14 @@ fn whole_ms(us: u64) -> u32 {
     hi.wrapping_mul(4_294_967).wrapping_add(q).wrapping_add(q2) // mod 2^32, as the cast
 }
 
-/// us to whole ms, at most `u32::MAX` (a multiply by the reciprocal for
-/// the usual values below 2^32 us, 71 minutes).
+/// us to whole ms, at most `u32::MAX`: [`whole_ms`] below the first `us`
+/// whose quotient no longer fits (49 days).
 fn us_to_ms(us: u64) -> u32 {
-    match u32::try_from(us) {
-        Ok(us) => div_rem_1000(us).0,
-        Err(_) => div_rem_u64(us, 1_000).and_then(|(q, _)| u32::try_from(q).ok()).unwrap_or(u32::MAX),
+    const SATURATES_AT: u64 = (u32::MAX as u64 + 1) * 1_000; // const-evaluated
+    if us >= SATURATES_AT {
+        u32::MAX
+    } else {
+        whole_ms(us)
     }
 }
 
@@ -961,7 +963,8 @@ mod tests {
             assert_eq!(whole_ms(us), (us / 1000) as u32, "{us}");
             assert_eq!(us_to_ms(us), (us / 1000).min(u64::from(u32::MAX)) as u32, "{us}");
         };
-        for us in [0, 1, 999, 1000, u64::from(u32::MAX), 1 << 32, u64::MAX, u64::MAX - 1] {
+        let saturates = (u64::from(u32::MAX) + 1) * 1000; // us_to_ms's first u32::MAX
+        for us in [0, 1, 999, 1000, u64::from(u32::MAX), 1 << 32, saturates - 1, saturates, u64::MAX, u64::MAX - 1] {
             check(us);
         }
         // around HI_MAX = (2^32 - 1000) / 296 = 14_510_021 and both ends of lo
