@@ -3,7 +3,8 @@
 //!
 //! Each tick, in this order:
 //! 1. time: the elapsed time since the previous tick (`now_us` is a free-running,
-//!    wrapping microsecond counter; the loop keeps its own 64-bit clock);
+//!    wrapping microsecond counter; the loop keeps its own 64-bit clock, and
+//!    its deadlines on that clock's low 32 bits, see [`Stamp`]);
 //! 2. state update: the estimator predicts with the motion the servos were
 //!    driving since the previous tick (the fixed-point [`crate::model::step`]
 //!    plus its uncertainty); a dead-reckoned pose (`step` alone) is kept
@@ -68,10 +69,47 @@ pub const TICK_US: u32 = 1_000_000 / config::timing::LOOP_HZ;
 const OVERRUN_US: u32 = TICK_US + TICK_US / 2;
 const _: () = assert!(config::timing::LOOP_HZ >= 1 && config::timing::LOOP_HZ <= 1_000);
 
-/// ms to us, in 64 bits (no overflow for any u32).
-const fn ms_to_us(ms: u32) -> u64 {
-    (ms as u64).saturating_mul(1_000)
+/// A moment on the loop clock, us: its low 32 bits, which wrap every 71.6
+/// minutes. Timestamps and deadlines are compared by their wrapping
+/// difference ([`reached`], `now.wrapping_sub(since)`), which is right for
+/// any two moments less than [`MAX_SPAN_US`] apart: every span the loop
+/// keeps is far shorter (asserted below), and every stored moment is
+/// renewed or done with well within it (a deadline is checked every tick).
+/// On the lx106 a 64-bit compare or saturating add is several instructions
+/// and a 64-bit field two loads and stores, for each of the loop's
+/// deadlines; the 64-bit clock itself stays for `t_ms` and
+/// [`Controller::clock_us`].
+type Stamp = u32;
+
+/// Longest span between two [`Stamp`]s that compare correctly, us (35.8 min).
+const MAX_SPAN_US: u32 = i32::MAX as u32;
+/// [`MAX_SPAN_US`] in whole ms.
+const MAX_SPAN_MS: u32 = MAX_SPAN_US / 1_000;
+
+/// ms to us, at most [`MAX_SPAN_US`].
+const fn ms_to_us(ms: u32) -> u32 {
+    if ms > MAX_SPAN_MS {
+        MAX_SPAN_US
+    } else {
+        ms.wrapping_mul(1_000) // <= MAX_SPAN_US
+    }
 }
+
+/// `now` is at or past `deadline` (the two less than [`MAX_SPAN_US`] apart).
+fn reached(now: Stamp, deadline: Stamp) -> bool {
+    now.wrapping_sub(deadline) <= MAX_SPAN_US
+}
+
+// Every span the loop keeps, ms, well under MAX_SPAN_MS: a timed command, a
+// calibration sweep of any u16 sample count, the deadman, the sensor
+// timings; a telemetry period is at most 1 s.
+const _: () = {
+    use config::{compass, serial, timing};
+    assert!(serial::MAX_DURATION_MS <= MAX_SPAN_MS);
+    assert!((u16::MAX as u64) * (compass::CALIBRATION_MS_PER_SAMPLE as u64) <= MAX_SPAN_MS as u64);
+    assert!(timing::DEADMAN_MS <= MAX_SPAN_MS);
+    assert!(timing::SENSOR_RETRY_MS <= MAX_SPAN_MS && timing::SENSOR_SILENT_MS <= MAX_SPAN_MS);
+};
 
 /// One sensor's health.
 #[derive(Clone, Copy, PartialEq, Eq, Debug, Default)]
@@ -84,10 +122,10 @@ pub struct SensorHealth {
     pub reinits: u32,
     /// Bus errors in a row (a single glitch does not take a sensor down).
     consecutive_bus_errors: u8,
-    /// When a failed sensor is tried again, loop clock us.
-    retry_at_us: u64,
-    /// When the sensor last delivered, loop clock us.
-    last_sample_us: u64,
+    /// When a failed sensor is tried again.
+    retry_at_us: Stamp,
+    /// When the sensor last delivered.
+    last_sample_us: Stamp,
 }
 
 impl SensorHealth {
@@ -136,11 +174,13 @@ impl Mode {
 
 /// How long a mode runs: for `duration_us` from the first tick that drives
 /// it (so a command runs for its whole duration whenever it arrives between
-/// ticks), or, without a duration, until the deadman.
+/// ticks), or, without a duration, until the deadman. A duration is at most
+/// [`MAX_SPAN_US`] (a longer one, only possible through [`Controller::handle`]
+/// with a hand-made command, runs for that long).
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
 pub struct Timer {
-    duration_us: Option<u64>,
-    started_us: Option<u64>,
+    duration_us: Option<u32>,
+    started_us: Option<Stamp>,
 }
 
 impl Timer {
@@ -148,11 +188,11 @@ impl Timer {
         Timer { duration_us: duration_ms.map(ms_to_us), started_us: None }
     }
     /// Time left at `now`, us (`None` for an untimed mode).
-    fn remaining_us(&self, now: u64) -> Option<u64> {
+    fn remaining_us(&self, now: Stamp) -> Option<u32> {
         let d = self.duration_us?;
         Some(match self.started_us {
             None => d,
-            Some(s) => d.saturating_sub(now.saturating_sub(s)),
+            Some(s) => d.saturating_sub(now.wrapping_sub(s)),
         })
     }
 }
@@ -174,8 +214,8 @@ pub struct Controller<F, R, C, S> {
     last_now_us: Option<u32>,
     /// A valid command arrived since the last tick.
     command_seen: bool,
-    /// When the last valid command was seen, loop clock us.
-    last_command_us: u64,
+    /// When the last valid command was seen.
+    last_command_us: Stamp,
 
     mode: Mode,
     /// Servo commands and motion applied at the last tick.
@@ -186,8 +226,9 @@ pub struct Controller<F, R, C, S> {
     dead: Pose,
 
     telemetry_hz: u16,
-    telemetry_period_us: u64,
-    next_telemetry_us: u64,
+    /// <= 1 s
+    telemetry_period_us: u32,
+    next_telemetry_us: Stamp,
     header_due: bool,
     /// A reading came since the last telemetry row (it is in `last_*`).
     fresh_front: bool,
@@ -367,7 +408,7 @@ where
                     config::compass::CALIBRATION_MIN_RADIUS,
                 ));
                 let turn = Motion::Turn(TurnRate::from_mrad_s(config::compass::CALIBRATION_TURN_MRAD_S));
-                // samples <= u16::MAX: the product fits in u32 (asserted below)
+                // samples <= u16::MAX: the product fits in u32 (asserted at MAX_SPAN_MS)
                 let limit_ms = u32::from(samples) * config::compass::CALIBRATION_MS_PER_SAMPLE;
                 self.mode = Mode::Calibrate { drive: self.model.drive(turn), timer: Timer::new(Some(limit_ms)) };
             }
@@ -403,9 +444,10 @@ where
         let was_off = self.telemetry_hz == 0;
         self.telemetry_hz = hz;
         // hz = 0 (off) gives period 0
-        self.telemetry_period_us = div_rem_u64(1_000_000, u64::from(hz)).map_or(0, |(q, _)| q);
+        // <= 1_000_000: fits
+        self.telemetry_period_us = div_rem_u64(1_000_000, u64::from(hz)).map_or(0, |(q, _)| q as u32);
         // the first row at the next tick (after the header if telemetry was off)
-        self.next_telemetry_us = self.clock_us;
+        self.next_telemetry_us = self.clock_us as Stamp;
         if hz != 0 && was_off {
             self.header_due = true;
         }
@@ -427,7 +469,7 @@ where
         if dt_us > OVERRUN_US {
             self.faults.overruns = self.faults.overruns.saturating_add(1);
         }
-        let now = self.clock_us;
+        let now = self.clock_us as Stamp; // the low 32 bits
         if core::mem::take(&mut self.command_seen) {
             self.last_command_us = now;
         }
@@ -476,7 +518,7 @@ where
         }
     }
 
-    fn sense(&mut self, now: u64) {
+    fn sense(&mut self, now: Stamp) {
         self.reinit_ran = false;
         // Each sample is stored once, where it is kept (`last_*`; `fresh_*`
         // flag it for the next row): at opt-level "z" a copy of a
@@ -537,12 +579,12 @@ where
     /// re-initialised in this tick (a bring-up blocks the loop, so one per
     /// tick keeps a tick's cost to one bring-up); it is polled from the
     /// next tick on.
-    fn ready(&mut self, which: Which, now: u64) -> bool {
+    fn ready(&mut self, which: Which, now: Stamp) -> bool {
         let health = self.health(which);
         if health.up {
             return true;
         }
-        if now < health.retry_at_us || self.reinit_ran {
+        if !reached(now, health.retry_at_us) || self.reinit_ran {
             return false;
         }
         self.reinit_ran = true;
@@ -567,7 +609,7 @@ where
     /// Keeps what a lidar's poll gave (`which` is `Front` or `Right`).
     /// Inlined: a call costs the tick bar ~100 instructions at opt-level "z".
     #[inline(always)]
-    fn lidar_polled(&mut self, which: Which, polled: nb::Result<LidarSample, SensorError>, now: u64) {
+    fn lidar_polled(&mut self, which: Which, polled: nb::Result<LidarSample, SensorError>, now: Stamp) {
         let s = match polled {
             Ok(s) => s,
             Err(e) => return self.missed(which, e, now),
@@ -586,7 +628,7 @@ where
     }
 
     /// A sensor delivered a sample at `now`.
-    fn sampled(&mut self, which: Which, now: u64) {
+    fn sampled(&mut self, which: Which, now: Stamp) {
         let h = self.health_mut(which);
         h.last_sample_us = now;
         h.consecutive_bus_errors = 0;
@@ -594,10 +636,10 @@ where
 
     /// A poll gave no sample: nothing new yet (a timeout once the sensor
     /// has been silent too long), or an error.
-    fn missed(&mut self, which: Which, e: nb::Error<SensorError>, now: u64) {
+    fn missed(&mut self, which: Which, e: nb::Error<SensorError>, now: Stamp) {
         match e {
             nb::Error::WouldBlock => {
-                let silent = now.saturating_sub(self.health(which).last_sample_us);
+                let silent = now.wrapping_sub(self.health(which).last_sample_us);
                 if silent >= ms_to_us(config::timing::SENSOR_SILENT_MS) {
                     self.fail(which, SensorError::Timeout, now);
                 }
@@ -613,7 +655,7 @@ where
     /// address byte is NACKed too, and a chip that is really gone is found
     /// after `SENSOR_MAX_BUS_ERRORS` polls (30 ms) anyway. At a
     /// re-initialisation a NACK means what it says: the sensor stays down.
-    fn fail(&mut self, which: Which, e: SensorError, now: u64) {
+    fn fail(&mut self, which: Which, e: SensorError, now: Stamp) {
         let f = &mut self.faults;
         let counter = match e {
             SensorError::Bus => &mut f.bus,
@@ -634,7 +676,7 @@ where
         };
         if down || !h.up {
             h.up = false;
-            h.retry_at_us = now.saturating_add(ms_to_us(config::timing::SENSOR_RETRY_MS));
+            h.retry_at_us = now.wrapping_add(ms_to_us(config::timing::SENSOR_RETRY_MS));
         }
     }
 
@@ -653,7 +695,7 @@ where
         }
     }
 
-    fn decide(&mut self, now: u64, sink: &mut impl LineSink) {
+    fn decide(&mut self, now: Stamp, sink: &mut impl LineSink) {
         if core::mem::take(&mut self.calibration_done) {
             let result = self.calibrator.map(|c| c.result());
             self.end_calibration(result, sink);
@@ -671,7 +713,7 @@ where
             }
             Some(_) => {}
             None => {
-                if now.saturating_sub(self.last_command_us) >= ms_to_us(config::timing::DEADMAN_MS) {
+                if now.wrapping_sub(self.last_command_us) >= ms_to_us(config::timing::DEADMAN_MS) {
                     self.mode = Mode::Idle;
                     self.respond(&Response::Note("deadman: no command, stopped"), sink);
                 }
@@ -716,17 +758,17 @@ where
         }
     }
 
-    fn telemetry(&mut self, now: u64, sink: &mut impl LineSink) {
-        if self.telemetry_hz == 0 || now < self.next_telemetry_us {
+    fn telemetry(&mut self, now: Stamp, sink: &mut impl LineSink) {
+        if self.telemetry_hz == 0 || !reached(now, self.next_telemetry_us) {
             return;
         }
         if core::mem::take(&mut self.header_due) {
             sink.write_line(telemetry_header());
         }
         // keep the schedule; after a stall, start again from now
-        self.next_telemetry_us = self.next_telemetry_us.saturating_add(self.telemetry_period_us);
-        if self.next_telemetry_us <= now {
-            self.next_telemetry_us = now.saturating_add(self.telemetry_period_us);
+        self.next_telemetry_us = self.next_telemetry_us.wrapping_add(self.telemetry_period_us);
+        if reached(now, self.next_telemetry_us) {
+            self.next_telemetry_us = now.wrapping_add(self.telemetry_period_us);
         }
         let t = Telemetry {
             t_ms: self.t_ms(),
@@ -820,8 +862,8 @@ where
 
     /// What `status` reports.
     pub fn status(&self) -> Status {
-        let now = self.clock_us;
-        let remaining_ms = self.mode.timer().and_then(|t| t.remaining_us(now)).map(us_to_ms);
+        let now = self.clock_us as Stamp;
+        let remaining_ms = self.mode.timer().and_then(|t| t.remaining_us(now)).map(|us| div_rem_1000(us).0);
         Status {
             t_ms: self.t_ms(),
             mode: self.mode.word(),
@@ -842,7 +884,6 @@ where
 }
 
 const _: () = assert!(config::timing::TELEMETRY_HZ <= config::serial::MAX_TELEMETRY_HZ as u32);
-const _: () = assert!((u16::MAX as u64) * (config::compass::CALIBRATION_MS_PER_SAMPLE as u64) <= u32::MAX as u64);
 
 /// `(us / 1000) as u32` (mod 2^32) without a 64-bit division (a ~430
 /// instruction call on the lx106): with `us = hi 2^32 + lo`, `lo = 1000 q +
@@ -860,17 +901,6 @@ fn whole_ms(us: u64) -> u32 {
     }
     let (q2, _) = div_rem_1000(hi.wrapping_mul(296).wrapping_add(r)); // no wrap: hi <= HI_MAX
     hi.wrapping_mul(4_294_967).wrapping_add(q).wrapping_add(q2) // mod 2^32, as the cast
-}
-
-/// us to whole ms, at most `u32::MAX`: [`whole_ms`] below the first `us`
-/// whose quotient no longer fits (49 days).
-fn us_to_ms(us: u64) -> u32 {
-    const SATURATES_AT: u64 = (u32::MAX as u64 + 1) * 1_000; // const-evaluated
-    if us >= SATURATES_AT {
-        u32::MAX
-    } else {
-        whole_ms(us)
-    }
 }
 
 /// `|q16| * 10^6 / 2^16` rounded half up, saturating at `u32::MAX`, in 32
@@ -955,16 +985,15 @@ fn push_config_line(out: &mut dyn TextOut, cal: &MagCalibration) -> Result<(), O
 
 #[cfg(test)]
 mod tests {
-    use super::{q16_to_micro, us_to_ms, whole_ms};
+    use super::{q16_to_micro, whole_ms};
 
     #[test]
     fn whole_ms_is_the_truncated_quotient() {
         let check = |us: u64| {
             assert_eq!(whole_ms(us), (us / 1000) as u32, "{us}");
-            assert_eq!(us_to_ms(us), (us / 1000).min(u64::from(u32::MAX)) as u32, "{us}");
         };
-        let saturates = (u64::from(u32::MAX) + 1) * 1000; // us_to_ms's first u32::MAX
-        for us in [0, 1, 999, 1000, u64::from(u32::MAX), 1 << 32, saturates - 1, saturates, u64::MAX, u64::MAX - 1] {
+        let big = (u64::from(u32::MAX) + 1) * 1000; // the first us whose quotient does not fit u32
+        for us in [0, 1, 999, 1000, u64::from(u32::MAX), 1 << 32, big - 1, big, u64::MAX, u64::MAX - 1] {
             check(us);
         }
         // around HI_MAX = (2^32 - 1000) / 296 = 14_510_021 and both ends of lo
