@@ -954,21 +954,29 @@ fn reciprocal(x: u32) -> u32 {
 }
 
 /// `v 2^e`: an arithmetic right shift for `e <= 0`, a saturating left shift
-/// for `e > 0`.
+/// for `e > 0` (out of line: [`shift_left`]).
 #[inline(always)]
 fn shift(v: i32, e: i32) -> i32 {
     if e <= 0 {
         v >> (-e).min(31)
     } else {
-        let e = e.min(31) as u32;
-        // fits when |v| < 2^(31 - e)
-        if v.unsigned_abs() < 1u32 << (31 - e) {
-            v << e
-        } else if v < 0 {
-            i32::MIN
-        } else {
-            i32::MAX
-        }
+        shift_left(v, e)
+    }
+}
+
+/// `v 2^e` for `e > 0`, saturating. One copy for [`shift`]'s nine sites:
+/// a correction's gain and covariance terms shift left only while the
+/// covariance is large (S at least 2^9 times the entries' scale).
+#[inline(never)]
+fn shift_left(v: i32, e: i32) -> i32 {
+    let e = e.clamp(0, 31) as u32;
+    // fits when |v| < 2^(31 - e)
+    if v.unsigned_abs() < 1u32 << (31 - e) {
+        v << e
+    } else if v < 0 {
+        i32::MIN
+    } else {
+        i32::MAX
     }
 }
 
