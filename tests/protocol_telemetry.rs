@@ -7,7 +7,8 @@ mod common;
 use common::rng::Rng;
 use heapless::String;
 use paperbot::control::protocol::number::{
-    div_rem_1000, div_rem_10k, parse_fixed, push_fixed, push_fixed_parts, push_i32, push_u32, NumError, TextOut,
+    div_rem_1000, div_rem_10k, parse_fixed, push_fixed, push_fixed_parts, push_i32, push_u32, put_template, Arg,
+    NumError, TextOut,
 };
 use paperbot::control::protocol::{
     classify_line, format_row, format_status, format_telemetry, parse_telemetry_row, telemetry_header, FaultCounters,
@@ -381,6 +382,36 @@ fn integer_decimal_formatting() {
     assert_eq!(parse_fixed(b"-.5", 1), Ok(-5));
     let mut tiny: String<3> = String::new();
     assert!(push_fixed(&mut tiny, -1234, 1).is_err());
+}
+
+/// Templates: each `%` takes the next argument, numbers as `push_fixed_parts`
+/// writes them, text as `push_text` (anything but printable ASCII is `?`).
+#[test]
+fn template_lines() {
+    let cases: &[(&str, &[Arg], &str)] = &[
+        ("no slots", &[], "no slots"),
+        ("", &[], ""),
+        ("%", &[Arg::int(7)], "7"),
+        ("a=% b=%", &[Arg::fixed(-1234, 2), Arg::Num(false, 5, 3)], "a=-12.34 b=0.005"),
+        ("%%%", &[Arg::Text("x"), Arg::fixed(0, 1), Arg::Text("")], "x0.0"),
+        ("-0: %", &[Arg::Num(true, 0, 2)], "-0: 0.00"),
+        ("max % min %", &[Arg::int(u32::MAX), Arg::fixed(i32::MIN, 0)], "max 4294967295 min -2147483648"),
+        ("text % end", &[Arg::Text("tab\there\u{e9}\n")], "text tab?here??? end"),
+        ("% and % (one argument short)", &[Arg::int(1)], "1 and  (one argument short)"),
+        ("% (one argument too many)", &[Arg::int(1), Arg::int(2)], "1 (one argument too many)"),
+    ];
+    for &(template, args, want) in cases {
+        let mut out: String<64> = String::new();
+        put_template(&mut out, template, args).expect("fits");
+        assert_eq!(out.as_str(), want, "{template:?}");
+        let mut line: OutLine<64> = OutLine::new();
+        put_template(&mut line, template, args).expect("fits");
+        assert_eq!(&*line, want, "{template:?} into an OutLine");
+    }
+    // too long: an error, with what fitted kept
+    let mut tiny: String<8> = String::new();
+    assert_eq!(put_template(&mut tiny, "abc % def", &[Arg::int(12_345)]), Err(Overflow));
+    assert_eq!(tiny.as_str(), "abc 1234");
 }
 
 /// What `push_fixed_parts` must write, by std formatting.

@@ -43,7 +43,7 @@
 //! clock difference is wrapping or saturating, every index is checked.
 
 use crate::config;
-use crate::control::protocol::number::{div_rem_1000, push_fixed_parts, push_str, push_u32, TextOut};
+use crate::control::protocol::number::{div_rem_1000, push_str, put_template, Arg, TextOut};
 use crate::control::protocol::Overflow;
 use crate::control::protocol::{
     format_response, format_status, format_telemetry, telemetry_header, Command, FaultCounters, LineBuffer, OutLine,
@@ -931,36 +931,27 @@ fn calibration_report(
     samples: u16,
     sectors: u8,
 ) -> Result<(), Overflow> {
+    let n = |v: u8| Arg::int(u32::from(v));
+    let samples = Arg::int(u32::from(samples));
     match result {
-        None => {
-            push_str(t, "# calibration abandoned after ")?;
-            push_u32(t, u32::from(samples))?;
-            push_str(t, " samples")
-        }
-        Some(Ok(_)) => {
-            push_str(t, "# calibration ok: ")?;
-            push_u32(t, u32::from(samples))?;
-            push_str(t, " samples, ")?;
-            push_u32(t, u32::from(sectors))?;
-            push_str(t, " of 12 sectors; applied. For config::compass:")
-        }
-        Some(Err(CalibrationError::NotEnoughSamples { have, need })) => {
-            push_str(t, "# err calibration timed out: ")?;
-            push_u32(t, u32::from(have))?;
-            push_str(t, " of ")?;
-            push_u32(t, u32::from(need))?;
-            push_str(t, " samples")
-        }
-        Some(Err(CalibrationError::SweepIncomplete { sectors, need })) => {
-            push_str(t, "# err calibration failed: the turn covered ")?;
-            push_u32(t, u32::from(sectors))?;
-            push_str(t, " of 12 sectors, need ")?;
-            push_u32(t, u32::from(need))
-        }
+        None => put_template(t, "# calibration abandoned after % samples", &[samples]),
+        Some(Ok(_)) => put_template(
+            t,
+            "# calibration ok: % samples, % of 12 sectors; applied. For config::compass:",
+            &[samples, n(sectors)],
+        ),
+        Some(Err(CalibrationError::NotEnoughSamples { have, need })) => put_template(
+            t,
+            "# err calibration timed out: % of % samples",
+            &[Arg::int(u32::from(have)), Arg::int(u32::from(need))],
+        ),
+        Some(Err(CalibrationError::SweepIncomplete { sectors, need })) => put_template(
+            t,
+            "# err calibration failed: the turn covered % of 12 sectors, need %",
+            &[n(sectors), n(need)],
+        ),
         Some(Err(CalibrationError::Degenerate { axis })) => {
-            push_str(t, "# err calibration failed: magnetometer axis ")?;
-            push_u32(t, u32::from(axis))?;
-            push_str(t, " never changed")
+            put_template(t, "# err calibration failed: magnetometer axis % never changed", &[n(axis)])
         }
     }
 }
@@ -969,23 +960,14 @@ fn calibration_report(
 /// (the same text as `driver::calibration::ConfigLine`, written without
 /// `core::fmt`): biases as integers, scales with six decimals.
 fn push_config_line(out: &mut dyn TextOut, cal: &MagCalibration) -> Result<(), Overflow> {
-    push_str(out, "pub const CALIBRATION: MagCalibration = MagCalibration::from_f64([")?;
-    for (i, b) in cal.bias.iter().enumerate() {
-        if i > 0 {
-            push_str(out, ", ")?;
-        }
-        push_fixed_parts(out, *b < 0, b.unsigned_abs(), 0)?;
-        push_str(out, ".0")?;
-    }
-    push_str(out, "], [")?;
-    for (i, q16) in cal.scale_q16.iter().enumerate() {
-        if i > 0 {
-            push_str(out, ", ")?;
-        }
-        // q16 * 10^6 / 2^16 rounded half away from zero (as math::div_round)
-        push_fixed_parts(out, *q16 < 0, q16_to_micro(q16.unsigned_abs()), 6)?;
-    }
-    push_str(out, "]);")
+    let [b0, b1, b2] = cal.bias.map(|b| Arg::fixed(b, 0));
+    // q16 * 10^6 / 2^16 rounded half away from zero (as math::div_round)
+    let [s0, s1, s2] = cal.scale_q16.map(|q16| Arg::Num(q16 < 0, q16_to_micro(q16.unsigned_abs()), 6));
+    put_template(
+        out,
+        "pub const CALIBRATION: MagCalibration = MagCalibration::from_f64([%.0, %.0, %.0], [%, %, %]);",
+        &[b0, b1, b2, s0, s1, s2],
+    )
 }
 
 #[cfg(test)]

@@ -1,7 +1,7 @@
 //! Commands: the grammar (see the module docs of [`super`]), the parser and
 //! the canonical form that `ok` responses echo.
 
-use super::number::{parse_fixed, push_fixed, push_str, push_u32, NumError, TextOut};
+use super::number::{parse_fixed, push_str, put_template, Arg, NumError, TextOut};
 use super::{Overflow, MAX_LINE};
 use crate::config::{compass, serial};
 use crate::math::{Angle, Speed, TurnRate};
@@ -185,35 +185,21 @@ impl ParseError {
     pub fn write(&self, out: &mut dyn TextOut) -> Result<(), Overflow> {
         match *self {
             ParseError::Empty => push_str(out, "empty line"),
-            ParseError::TooLong => {
-                push_str(out, "line too long, max ")?;
-                push_u32(out, MAX_LINE as u32)?; // MAX_LINE <= 255 (asserted)
-                push_str(out, " bytes")
-            }
+            // MAX_LINE <= 255 (asserted)
+            ParseError::TooLong => put_template(out, "line too long, max % bytes", &[Arg::int(MAX_LINE as u32)]),
             ParseError::NotAscii => push_str(out, "line has a byte that is not printable ASCII"),
             ParseError::UnknownCommand => push_str(out, "unknown command, try help"),
             ParseError::MissingArgument(f) => {
-                push_str(out, "missing ")?;
-                push_str(out, f.name())?;
-                push_str(out, ", want ")?;
+                put_template(out, "missing %, want ", &[Arg::Text(f.name())])?;
                 write_want(out, f)
             }
-            ParseError::BadNumber(f) => {
-                push_str(out, "bad ")?;
-                push_str(out, f.name())?;
-                push_str(out, ", want ")?;
+            ParseError::BadNumber(f) | ParseError::BadChoice(f) => {
+                put_template(out, "bad %, want ", &[Arg::Text(f.name())])?;
                 write_want(out, f)
             }
             ParseError::OutOfRange(f) => {
-                push_str(out, f.name())?;
-                push_str(out, " out of range ")?;
+                put_template(out, "% out of range ", &[Arg::Text(f.name())])?;
                 write_range(out, f)
-            }
-            ParseError::BadChoice(f) => {
-                push_str(out, "bad ")?;
-                push_str(out, f.name())?;
-                push_str(out, ", want ")?;
-                write_want(out, f)
             }
             ParseError::TrailingInput => push_str(out, "unexpected input after the arguments"),
         }
@@ -224,29 +210,22 @@ impl ParseError {
 /// "left or right".
 fn write_want(out: &mut dyn TextOut, f: Field) -> Result<(), Overflow> {
     if f.range().is_none() {
-        return push_str(out, "left or right");
+        return write_range(out, f);
     }
     push_str(out, if f.decimals() == 0 { "an integer " } else { "a number " })?;
     write_range(out, f)?;
     if f.decimals() > 0 {
-        push_str(out, " with up to ")?;
-        push_u32(out, f.decimals())?;
-        push_str(out, " decimals")?;
+        put_template(out, " with up to % decimals", &[Arg::int(f.decimals())])?;
     }
     Ok(())
 }
 
-/// "0.001..0.300 m/s"
+/// "0.001..0.300 m/s" ("left or right" for the trim side)
 fn write_range(out: &mut dyn TextOut, f: Field) -> Result<(), Overflow> {
     let Some((lo, hi)) = f.range() else { return push_str(out, "left or right") };
-    push_fixed(out, lo, f.decimals())?;
-    push_str(out, "..")?;
-    push_fixed(out, hi, f.decimals())?;
-    if !f.unit().is_empty() {
-        push_str(out, " ")?;
-        push_str(out, f.unit())?;
-    }
-    Ok(())
+    let (d, unit) = (f.decimals(), f.unit());
+    let space = if unit.is_empty() { "" } else { " " };
+    put_template(out, "%..%%%", &[Arg::fixed(lo, d), Arg::fixed(hi, d), Arg::Text(space), Arg::Text(unit)])
 }
 
 fn is_space(b: &u8) -> bool {
@@ -423,12 +402,12 @@ pub fn parse(line: &[u8]) -> Result<Command, ParseError> {
     Ok(command)
 }
 
+/// ` <seconds>` with three decimals, if there is a duration.
 fn push_duration(out: &mut dyn TextOut, duration_ms: Option<u32>) -> Result<(), Overflow> {
-    if let Some(ms) = duration_ms {
-        push_str(out, " ")?;
-        push_fixed(out, ms.min(i32::MAX as u32) as i32, 3)?;
+    match duration_ms {
+        Some(ms) => put_template(out, " %", &[Arg::Num(false, ms, 3)]),
+        None => Ok(()),
     }
-    Ok(())
 }
 
 /// Writes the canonical form of a command: the grammar's short keyword and
@@ -437,50 +416,32 @@ fn push_duration(out: &mut dyn TextOut, duration_ms: Option<u32>) -> Result<(), 
 pub fn format_command(cmd: &Command, out: &mut dyn TextOut) -> Result<(), Overflow> {
     match *cmd {
         Command::Drive { motion, duration_ms } => {
-            match motion {
-                Motion::Straight(v) => {
-                    push_str(out, if v.to_bits() < 0 { "back " } else { "fwd " })?;
-                    push_fixed(out, v.to_mm_s().saturating_abs(), 3)?;
-                }
-                Motion::Turn(w) => {
-                    push_str(out, if w.to_bits() < 0 { "ccw " } else { "cw " })?;
-                    push_fixed(out, w.to_mrad_s().saturating_abs(), 3)?;
-                }
-                Motion::Stop => push_str(out, "stop")?,
-            }
-            if !matches!(motion, Motion::Stop) {
-                push_duration(out, duration_ms)?;
-            }
-            Ok(())
+            // the word gives the direction, the number is positive
+            let (word, value) = match motion {
+                Motion::Straight(v) => (if v.to_bits() < 0 { "back" } else { "fwd" }, v.to_mm_s()),
+                Motion::Turn(w) => (if w.to_bits() < 0 { "ccw" } else { "cw" }, w.to_mrad_s()),
+                Motion::Stop => return push_str(out, "stop"),
+            };
+            put_template(out, "% %", &[Arg::Text(word), Arg::fixed(value.saturating_abs(), 3)])?;
+            push_duration(out, duration_ms)
         }
         Command::Stop => push_str(out, "stop"),
         Command::Servo { left, right, duration_ms } => {
-            push_str(out, "servo ")?;
-            push_fixed(out, left.to_centi() as i32, 2)?; // <= 18_000
-            push_str(out, " ")?;
-            push_fixed(out, right.to_centi() as i32, 2)?;
+            let (l, r) = (Arg::Num(false, left.to_centi(), 2), Arg::Num(false, right.to_centi(), 2));
+            put_template(out, "servo % %", &[l, r])?;
             push_duration(out, duration_ms)
         }
         Command::Trim { side, trim } => {
-            push_str(out, if side == Side::Left { "trim left " } else { "trim right " })?;
-            push_fixed(out, q8_to_centi(i32::from(trim.0)), 2)
+            let word = if side == Side::Left { "left" } else { "right" };
+            put_template(out, "trim % %", &[Arg::Text(word), Arg::fixed(q8_to_centi(i32::from(trim.0)), 2)])
         }
-        Command::SetPose { x_mm, y_mm, heading } => {
-            push_str(out, "pose ")?;
-            push_fixed(out, x_mm, 0)?;
-            push_str(out, " ")?;
-            push_fixed(out, y_mm, 0)?;
-            push_str(out, " ")?;
-            push_fixed(out, heading.to_millidegrees() as i32, 3) // < 360_000
-        }
-        Command::Calibrate { samples } => {
-            push_str(out, "cal ")?;
-            push_u32(out, u32::from(samples))
-        }
-        Command::Rate { hz } => {
-            push_str(out, "rate ")?;
-            push_u32(out, u32::from(hz))
-        }
+        Command::SetPose { x_mm, y_mm, heading } => put_template(
+            out,
+            "pose % % %",
+            &[Arg::fixed(x_mm, 0), Arg::fixed(y_mm, 0), Arg::Num(false, heading.to_millidegrees(), 3)],
+        ),
+        Command::Calibrate { samples } => put_template(out, "cal %", &[Arg::int(u32::from(samples))]),
+        Command::Rate { hz } => put_template(out, "rate %", &[Arg::int(u32::from(hz))]),
         Command::Status => push_str(out, "status"),
         Command::Help => push_str(out, "help"),
     }

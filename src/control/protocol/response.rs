@@ -3,7 +3,7 @@
 //! telemetry directly.
 
 use super::command::{format_command, q8_to_centi, Command, ParseError};
-use super::number::{push_byte, push_fixed, push_str, push_u32, TextOut};
+use super::number::{push_str, push_text, put_template, Arg, TextOut};
 use super::telemetry::{motion_word, FaultCounters};
 use super::Overflow;
 use crate::model::{Motion, Pose, ServoCmd, Trim};
@@ -24,15 +24,6 @@ pub enum Response<'a> {
     Fail(&'a str),
     /// Anything else worth saying: `# <text>`.
     Note(&'a str),
-}
-
-/// Appends text, with any byte that is not printable ASCII replaced by `?`
-/// (keeps the answer on one line).
-fn push_text(out: &mut dyn TextOut, text: &str) -> Result<(), Overflow> {
-    for b in text.bytes() {
-        push_byte(out, if (0x20..0x7F).contains(&b) { b } else { b'?' })?;
-    }
-    Ok(())
 }
 
 /// Appends a response line (no terminator). On [`Overflow`] the string
@@ -97,52 +88,43 @@ pub fn format_status(s: &Status, out: &mut dyn TextOut) -> Result<(), Overflow> 
         Motion::Straight(v) => (v.to_mm_s(), 0),
         Motion::Turn(w) => (0, w.to_mrad_s()),
     };
-    push_str(out, "# status t_ms=")?;
-    push_u32(out, s.t_ms)?;
-    push_str(out, " mode=")?;
     // at most MODE_MAX bytes of the mode word (it may be any &str)
-    push_text(out, s.mode.get(..s.mode.len().min(MODE_MAX)).unwrap_or("?"))?;
-    push_str(out, " motion=")?;
-    push_str(out, motion_word(s.motion.kind()))?;
-    push_str(out, " v_mps=")?;
-    push_fixed(out, v, 3)?;
-    push_str(out, " w_radps=")?;
-    push_fixed(out, w, 3)?;
+    let mode = s.mode.get(..s.mode.len().min(MODE_MAX)).unwrap_or("?");
+    let motion = motion_word(s.motion.kind());
+    put_template(
+        out,
+        "# status t_ms=% mode=% motion=% v_mps=% w_radps=%",
+        &[Arg::int(s.t_ms), Arg::Text(mode), Arg::Text(motion), Arg::fixed(v, 3), Arg::fixed(w, 3)],
+    )?;
     if let Some(ms) = s.remaining_ms {
-        push_str(out, " left_ms=")?;
-        push_u32(out, ms)?;
+        put_template(out, " left_ms=%", &[Arg::int(ms)])?;
     }
-    push_str(out, " x_mm=")?;
-    push_fixed(out, s.pose.x.to_length().to_mm(), 0)?;
-    push_str(out, " y_mm=")?;
-    push_fixed(out, s.pose.y.to_length().to_mm(), 0)?;
-    push_str(out, " heading_deg=")?;
-    push_fixed(out, s.pose.theta.to_millidegrees() as i32, 3)?; // < 360_000
-    push_str(out, " left_cmd=")?;
-    push_fixed(out, s.left_cmd.to_centi() as i32, 2)?; // <= 18_000
-    push_str(out, " right_cmd=")?;
-    push_fixed(out, s.right_cmd.to_centi() as i32, 2)?;
-    push_str(out, " trim_left=")?;
-    push_fixed(out, q8_to_centi(i32::from(s.left_trim.0)), 2)?;
-    push_str(out, " trim_right=")?;
-    push_fixed(out, q8_to_centi(i32::from(s.right_trim.0)), 2)?;
-    push_str(out, " rate_hz=")?;
-    push_u32(out, u32::from(s.rate_hz))?;
-    for (name, ok) in [(" front=", s.front_ok), (" right=", s.right_ok), (" compass=", s.compass_ok)] {
-        push_str(out, name)?;
-        push_str(out, if ok { "ok" } else { "down" })?;
-    }
-    push_str(out, " faults=")?;
+    let up = |ok: bool| Arg::Text(if ok { "ok" } else { "down" });
     let f = &s.faults;
-    for (i, count) in
-        [f.bus, f.timeout, f.missing, f.bad_sample, f.rejected_outliers, f.overruns].into_iter().enumerate()
-    {
-        if i > 0 {
-            push_str(out, "/")?;
-        }
-        push_u32(out, count)?;
-    }
-    Ok(())
+    put_template(
+        out,
+        " x_mm=% y_mm=% heading_deg=% left_cmd=% right_cmd=% trim_left=% trim_right=% rate_hz=% \
+front=% right=% compass=% faults=%/%/%/%/%/%",
+        &[
+            Arg::fixed(s.pose.x.to_length().to_mm(), 0),
+            Arg::fixed(s.pose.y.to_length().to_mm(), 0),
+            Arg::Num(false, s.pose.theta.to_millidegrees(), 3),
+            Arg::Num(false, s.left_cmd.to_centi(), 2),
+            Arg::Num(false, s.right_cmd.to_centi(), 2),
+            Arg::fixed(q8_to_centi(i32::from(s.left_trim.0)), 2),
+            Arg::fixed(q8_to_centi(i32::from(s.right_trim.0)), 2),
+            Arg::int(u32::from(s.rate_hz)),
+            up(s.front_ok),
+            up(s.right_ok),
+            up(s.compass_ok),
+            Arg::int(f.bus),
+            Arg::int(f.timeout),
+            Arg::int(f.missing),
+            Arg::int(f.bad_sample),
+            Arg::int(f.rejected_outliers),
+            Arg::int(f.overruns),
+        ],
+    )
 }
 
 /// The `help` answer, one line each (ranges as in `config::serial`; a test
