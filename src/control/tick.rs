@@ -332,6 +332,7 @@ where
 
     /// Takes one received serial byte; a finished line is parsed and
     /// handled at once (its answer goes to `sink`).
+    #[inline(never)]
     pub fn feed(&mut self, byte: u8, sink: &mut impl LineSink) {
         match self.input.push(byte) {
             None => {}
@@ -352,6 +353,7 @@ where
     }
 
     /// Carries out one parsed command (answers `# ok <command>` first).
+    #[inline(never)]
     pub fn handle(&mut self, cmd: Command, sink: &mut impl LineSink) {
         self.command_seen = true;
         if matches!(self.mode, Mode::Calibrate { .. })
@@ -457,6 +459,7 @@ where
 
     /// Runs one loop iteration at `now_us` (a free-running microsecond
     /// counter that may wrap; call it every [`TICK_US`]).
+    #[inline(never)]
     pub fn tick(&mut self, now_us: u32, sink: &mut impl LineSink) {
         // 1. time
         let dt_us = match self.last_now_us {
