@@ -104,16 +104,17 @@
 //!
 //! # Cost (lx106: no 32x32->64 multiply, no divide)
 //! Measured by `lx106/run.sh` (ICOUNT under QEMU, worst of 8 poses, 10 ms
-//! step); without re-acquisition and the arena limit in the first
-//! parentheses, before this arithmetic in the second:
+//! step) at opt-level "z" (`lx106/BENCHMARKS.md`); in parentheses, at
+//! opt-level 3 in earlier versions: without re-acquisition and the arena
+//! limit first, before this arithmetic second:
 //!
 //! | call | instructions |
 //! | --- | ---: |
-//! | predict Stop | 180 (169; 626) |
-//! | predict Straight | 708 (689; 1221) |
-//! | predict Turn | 734 (720; 1284) |
-//! | update_lidar (accepted, incl. its [`Beam`]) | 1385 (1362; 5368) |
-//! | update_heading (accepted) | 878 (837; 4527) |
+//! | predict Stop | 179 (169; 626) |
+//! | predict Straight | 644 (689; 1221) |
+//! | predict Turn | 715 (720; 1284) |
+//! | update_lidar (accepted, incl. its [`Beam`]) | 1519 (1362; 5368) |
+//! | update_heading (accepted) | 965 (837; 4527) |
 //!
 //! Predict: [`advance`] on the pose in place (no `sin_cos` going straight,
 //! one turning, both from the pose's cache), the Jacobian and noise from
