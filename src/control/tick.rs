@@ -335,6 +335,9 @@ where
 
     /// Takes one received serial byte; a finished line is parsed and
     /// handled at once (its answer goes to `sink`).
+    // Out of line, as `tick` and `handle`: the firmware's main loop calls
+    // each once, and inlined into its frame every field access paid a long
+    // stack offset (BENCHMARKS.md, "Fourth pass").
     #[inline(never)]
     pub fn feed(&mut self, byte: u8, sink: &mut impl LineSink) {
         match self.input.push(byte) {
