@@ -7,8 +7,7 @@ mod common;
 use common::rng::Rng;
 use heapless::String;
 use paperbot::control::protocol::number::{
-    div_rem_1000, div_rem_10k, parse_fixed, push_fixed, push_fixed_parts, push_i32, push_u32, put_template, Arg,
-    NumError, TextOut,
+    div_rem_1000, div_rem_10k, parse_fixed, push_fixed, push_fixed_parts, put_template, Arg, NumError, TextOut,
 };
 use paperbot::control::protocol::{
     classify_line, format_row, format_status, format_telemetry, parse_telemetry_row, telemetry_header, FaultCounters,
@@ -372,8 +371,8 @@ fn integer_decimal_formatting() {
         assert_eq!(parse_fixed(out.as_bytes(), decimals), Ok(v), "{out}");
     }
     let mut out: String<32> = String::new();
-    push_u32(&mut out, u32::MAX).unwrap();
-    push_i32(&mut out, i32::MIN).unwrap();
+    push_fixed_parts(&mut out, false, u32::MAX, 0).unwrap();
+    push_fixed(&mut out, i32::MIN, 0).unwrap();
     assert_eq!(out.as_str(), "4294967295-2147483648");
     assert_eq!(parse_fixed(b"2147483648", 0), Err(NumError::Range));
     assert_eq!(parse_fixed(b"-2147483649", 0), Err(NumError::Range));

@@ -177,7 +177,7 @@ pub fn put_template(out: &mut dyn TextOut, template: &str, args: &[Arg]) -> Resu
         let (text, tail) = rest.split_at(i); // i < rest.len()
         out.put_ascii(text)?;
         match args.next() {
-            Some(&Arg::Num(negative, magnitude, decimals)) => put_number(out, 0, negative, magnitude, decimals)?,
+            Some(&Arg::Num(negative, magnitude, decimals)) => push_fixed_parts(out, negative, magnitude, decimals)?,
             Some(Arg::Text(t)) => push_text(out, t)?,
             None => {}
         }
@@ -397,43 +397,19 @@ impl Cursor {
     }
 }
 
-/// Appends `prefix` (unless 0), then `magnitude / 10^decimals` as in
-/// [`push_fixed_parts`], in one [`TextOut::put_ascii`].
-#[inline(never)]
-pub(super) fn put_number(
-    out: &mut dyn TextOut,
-    prefix: u8,
-    negative: bool,
-    magnitude: u32,
-    decimals: u32,
-) -> Result<(), Overflow> {
-    let mut text = Cursor::new();
-    text.number(prefix, negative, magnitude, decimals);
-    text.flush(out)
-}
-
 /// Appends `magnitude / 10^decimals` as a decimal with exactly `decimals`
 /// digits after the point (none and no point when `decimals` is 0), with a
-/// `-` in front when `negative` and the magnitude is not zero.
-/// `decimals` above 9 is treated as 9.
+/// `-` in front when `negative` and the magnitude is not zero, in one
+/// [`TextOut::put_ascii`]. `decimals` above 9 is treated as 9.
 #[inline(never)]
 pub fn push_fixed_parts(out: &mut dyn TextOut, negative: bool, magnitude: u32, decimals: u32) -> Result<(), Overflow> {
-    put_number(out, 0, negative, magnitude, decimals)
+    let mut text = Cursor::new();
+    text.number(0, negative, magnitude, decimals);
+    text.flush(out)
 }
 
 /// Appends a signed scaled value as a decimal (see [`push_fixed_parts`]).
 #[inline(never)]
 pub fn push_fixed(out: &mut dyn TextOut, value: i32, decimals: u32) -> Result<(), Overflow> {
     push_fixed_parts(out, value < 0, value.unsigned_abs(), decimals)
-}
-
-/// Appends an unsigned integer.
-#[inline(never)]
-pub fn push_u32(out: &mut dyn TextOut, value: u32) -> Result<(), Overflow> {
-    push_fixed_parts(out, false, value, 0)
-}
-
-/// Appends a signed integer.
-pub fn push_i32(out: &mut dyn TextOut, value: i32) -> Result<(), Overflow> {
-    push_fixed(out, value, 0)
 }
