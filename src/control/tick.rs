@@ -4,7 +4,7 @@
 //! Each tick, in this order:
 //! 1. time: the elapsed time since the previous tick (`now_us` is a free-running,
 //!    wrapping microsecond counter; the loop keeps its own 64-bit clock, and
-//!    its deadlines on that clock's low 32 bits, see [`Stamp`]);
+//!    its deadlines on that clock's low 32 bits, see `Stamp`);
 //! 2. state update: the estimator predicts with the motion the servos were
 //!    driving since the previous tick (the fixed-point [`crate::model::step`]
 //!    plus its uncertainty); a dead-reckoned pose (`step` alone) is kept
@@ -176,7 +176,7 @@ impl Mode {
 /// How long a mode runs: for `duration_us` from the first tick that drives
 /// it (so a command runs for its whole duration whenever it arrives between
 /// ticks), or, without a duration, until the deadman. A duration is at most
-/// [`MAX_SPAN_US`] (a longer one, only possible through [`Controller::handle`]
+/// `MAX_SPAN_US`, 35.8 min (a longer one, only possible through [`Controller::handle`]
 /// with a hand-made command, runs for that long).
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
 pub struct Timer {
