@@ -549,12 +549,15 @@ where
                     if let Some(cal) = self.calibrator.as_mut() {
                         self.calibration_done = cal.feed(s.raw) == CalStatus::Done;
                     }
-                    // rebuilt field by field: 88 B less code at opt-level "z"
-                    // than storing `s` as it came (the field's 12 bytes
-                    // are still one memcpy call)
                     let f = s.field;
-                    let field = crate::model::compass::MagField { x: f.x, y: f.y, z: f.z };
-                    self.last_compass = Some(CompassSample { raw: s.raw, field, heading: s.heading });
+                    let kept = self.last_compass.insert(CompassSample {
+                        raw: s.raw,
+                        field: Default::default(),
+                        heading: s.heading,
+                    });
+                    kept.field.x = f.x;
+                    kept.field.y = f.y;
+                    kept.field.z = f.z;
                 }
                 Err(e) => self.missed(Which::Compass, e, now),
             }
