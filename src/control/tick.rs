@@ -549,6 +549,9 @@ where
                     if let Some(cal) = self.calibrator.as_mut() {
                         self.calibration_done = cal.feed(s.raw) == CalStatus::Done;
                     }
+                    // the field member by member: at opt-level "z" a copy of
+                    // the 12-byte `MagField` is a `memcpy` call (~80
+                    // instructions on the lx106; BENCHMARKS.md, "Fifth pass")
                     let f = s.field;
                     let kept = self.last_compass.insert(CompassSample {
                         raw: s.raw,
