@@ -29,14 +29,14 @@ AR="${XT_AR:-xtensa-lx106-elf-ar}"
 # name and renamed into place (atomic), so a concurrent link never reads a
 # half-written one.
 #
-# GNU as options: `--no-target-align`. By default GNU as pads the bytes after
-# every unconditional jump so that the next branch target does not straddle
-# a 4-byte fetch word (fill bytes, never executed: 568 B of the core at
-# 1761c99). LLVM's own Xtensa assembler, which the robot's toolchain
-# (`cargo +esp`) uses, emits no such padding; it narrows instructions to
-# their 16-bit density forms as GNU as does. So the lx106 figures count the
-# code the robot's build holds, not GNU as's alignment. Instruction counts
-# are unchanged (the padding is never executed).
+# GNU as options: `--no-target-align`. By default GNU as aligns branch
+# targets to 4-byte fetch words: fill bytes after unconditional jumps (never
+# executed) and wide forms of narrow instructions before fall-through
+# targets, 568 B of the core at 1761c99. LLVM's own Xtensa assembler, which
+# the robot's toolchain (`cargo +esp`) uses, does no such alignment (its
+# density compression narrows the same instructions GNU as narrows). So the
+# lx106 figures count the code the robot's build holds, not GNU as's
+# alignment. Instruction counts are unchanged.
 GAS_FLAGS=(-Wa,--no-target-align)
 assemble() { # $1 = LLVM .s, $2 = output .o
   if [[ -f "$2" && "$2" -nt "$1" ]]; then return 0; fi
