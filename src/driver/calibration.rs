@@ -161,22 +161,26 @@ impl MagCalibrator {
             return Err(CalibrationError::SweepIncomplete { sectors: self.sectors(), need: self.need_sectors });
         }
         let mut bias = [0i32; 3];
-        let mut range = [0i64; 3];
+        let mut range = [0i32; 3];
         for (i, ((lo, hi), (b, r))) in
             self.min.iter().zip(self.max.iter()).zip(bias.iter_mut().zip(range.iter_mut())).enumerate()
         {
-            // lo <= hi, both |.| < 2^17.
-            *r = i64::from(*hi).saturating_sub(i64::from(*lo));
+            // lo <= hi, both |.| < 2^17: 32-bit sums and differences.
+            *r = hi.saturating_sub(*lo);
             if *r <= 0 {
                 return Err(CalibrationError::Degenerate { axis: i as u8 });
             }
-            *b = div_round(i64::from(*hi).saturating_add(i64::from(*lo)), 2).unwrap_or(0) as i32;
+            // (hi + lo) / 2, halves away from zero (`/ 2` truncates toward zero)
+            let s = hi.saturating_add(*lo);
+            *b = s.saturating_add(if s < 0 { -1 } else { 1 }) / 2;
         }
-        // scale_i = (sum / 3) / range_i = sum / (3 range_i), in Q16.
-        let sum: i64 = range.iter().sum();
+        // scale_i = (sum / 3) / range_i = sum / (3 range_i), in Q16: sum < 2^20,
+        // so sum 2^16 needs 64 bits.
+        let sum = i64::from(range.iter().fold(0i32, |a, &r| a.saturating_add(r)));
         let mut scale_q16 = [0i32; 3];
         for (i, (s, r)) in scale_q16.iter_mut().zip(range.iter()).enumerate() {
-            let q = div_round(sum << 16, r.saturating_mul(3)).ok_or(CalibrationError::Degenerate { axis: i as u8 })?;
+            let q = div_round(sum << 16, i64::from(r.saturating_mul(3)))
+                .ok_or(CalibrationError::Degenerate { axis: i as u8 })?;
             *s = i32::try_from(q).map_err(|_| CalibrationError::Degenerate { axis: i as u8 })?;
         }
         Ok(MagCalibration { bias, scale_q16 })
