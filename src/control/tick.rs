@@ -367,9 +367,9 @@ where
         {
             self.end_calibration(None, sink);
         }
+        self.respond(&Response::Ok(&cmd), sink);
         match cmd {
             Command::Drive { motion, duration_ms } => {
-                self.respond(&Response::Ok(&cmd), sink);
                 let drive = self.model.drive(motion);
                 self.mode = Mode::Drive { drive, timer: Timer::new(duration_ms) };
                 if drive.saturated {
@@ -377,16 +377,13 @@ where
                 }
             }
             Command::Stop => {
-                self.respond(&Response::Ok(&cmd), sink);
                 self.mode = Mode::Idle;
             }
             Command::Servo { left, right, duration_ms } => {
-                self.respond(&Response::Ok(&cmd), sink);
                 let motion = self.model.motion_from_commands(left, right);
                 self.mode = Mode::Servo { left, right, motion, timer: Timer::new(duration_ms) };
             }
             Command::Trim { side, trim } => {
-                self.respond(&Response::Ok(&cmd), sink);
                 match side {
                     Side::Left => self.model.left_trim = trim,
                     Side::Right => self.model.right_trim = trim,
@@ -397,7 +394,6 @@ where
                 }
             }
             Command::SetPose { x_mm, y_mm, heading } => {
-                self.respond(&Response::Ok(&cmd), sink);
                 let pose = Pose::new(
                     Coord::from_length(Length::from_mm(x_mm)),
                     Coord::from_length(Length::from_mm(y_mm)),
@@ -407,7 +403,6 @@ where
                 self.dead = pose;
             }
             Command::Calibrate { samples } => {
-                self.respond(&Response::Ok(&cmd), sink);
                 self.calibrator = Some(MagCalibrator::new(
                     self.compass.asa(),
                     config::compass::AXES,
@@ -421,11 +416,9 @@ where
                 self.mode = Mode::Calibrate { drive: self.model.drive(turn), timer: Timer::new(Some(limit_ms)) };
             }
             Command::Rate { hz } => {
-                self.respond(&Response::Ok(&cmd), sink);
                 self.set_rate(hz);
             }
             Command::Status => {
-                self.respond(&Response::Ok(&cmd), sink);
                 let status = self.status();
                 self.out.clear();
                 if format_status(&status, &mut self.out).is_ok() {
@@ -433,7 +426,6 @@ where
                 }
             }
             Command::Help => {
-                self.respond(&Response::Ok(&cmd), sink);
                 for line in HELP {
                     sink.write_line(line);
                 }
