@@ -459,11 +459,7 @@ impl Estimator {
                 // K_DIST < 2^21: var_d < 2^20, so every Q30 product below is
                 // far inside i32.
                 let ad = d.saturating_abs();
-                let var_d = mul_hi(ad, K_DIST);
-                let vc = q30(var_d, c);
-                p.xx = p.xx.saturating_add(q30(vc, c));
-                p.xy = p.xy.saturating_add(q30(vc, s));
-                p.yy = p.yy.saturating_add(q30(q30(var_d, s), s));
+                add_noise(p, mul_hi(ad, K_DIST), c, s);
                 p.tt = p.tt.saturating_add(mul_hi(ad, K_DRIFT));
             }
             Motion::Turn(_) => {
@@ -487,10 +483,7 @@ impl Estimator {
                 let vt = mul_hi(turned, K_TURN);
                 let g1 = -(mul_hi(D_OVER_L_Q31, s1) << 1);
                 let g2 = mul_hi(D_OVER_L_Q31, c1) << 1;
-                let (v1, v2) = (q30(vt, g1), q30(vt, g2));
-                p.xx = p.xx.saturating_add(q30(v1, g1));
-                p.xy = p.xy.saturating_add(q30(v1, g2));
-                p.yy = p.yy.saturating_add(q30(v2, g2));
+                let (v1, v2) = add_noise(p, vt, g1, g2);
                 p.xt = p.xt.saturating_add(v1);
                 p.yt = p.yt.saturating_add(v2);
                 p.tt = p.tt.saturating_add(vt);
@@ -1042,6 +1035,20 @@ isqrt_of!(
 #[inline(always)]
 fn q30(a: i32, f: i32) -> i32 {
     mul_hi(a, f) << 2
+}
+
+/// Adds `v g g^T` to the position block of `P` (`g = (g1, g2)` in Q30,
+/// `|g| <= 1`, `v` small: see [`Estimator::predict`]) and returns
+/// `(v g1, v g2)`, the heading column's share of a turn's noise. Both
+/// motions' noise has this shape (a straight step's `g` is the heading's
+/// `(cos, sin)`): one out-of-line copy for the two.
+#[inline(never)]
+fn add_noise(p: &mut Covariance, v: i32, g1: i32, g2: i32) -> (i32, i32) {
+    let (v1, v2) = (q30(v, g1), q30(v, g2));
+    p.xx = p.xx.saturating_add(q30(v1, g1));
+    p.xy = p.xy.saturating_add(q30(v1, g2));
+    p.yy = p.yy.saturating_add(q30(v2, g2));
+    (v1, v2)
 }
 
 /// `F P F^T` for `F = I + f1 e_x e_t^T + f2 e_y e_t^T` (f in Q30, |f| < 2^29,
