@@ -709,14 +709,14 @@ where
 
     fn decide(&mut self, now: Stamp, sink: &mut impl LineSink) {
         if core::mem::take(&mut self.calibration_done) {
-            let result = self.calibrator.map(|c| c.result());
+            let result = self.calibrator.as_ref().map(MagCalibrator::result);
             self.end_calibration(result, sink);
             return;
         }
         let Some(timer) = self.mode.timer().copied() else { return };
         match timer.remaining_us(now) {
             Some(0) if matches!(self.mode, Mode::Calibrate { .. }) => {
-                let result = self.calibrator.map(|c| c.result());
+                let result = self.calibrator.as_ref().map(MagCalibrator::result);
                 self.end_calibration(result, sink);
             }
             Some(0) => {
