@@ -72,20 +72,11 @@ impl<const N: usize> TextOut for OutLine<N> {
         self.len = self.len.saturating_add(1); // < N before
         Ok(())
     }
+    /// One loop: a fast path for ASCII that fits (a word-wise check and a
+    /// plain copy) was 224 B more code for ~360 fewer instructions per
+    /// telemetry row.
     #[inline(never)]
     fn put_ascii(&mut self, bytes: &[u8]) -> Result<(), Overflow> {
-        // the usual case: ASCII that fits, in one copy
-        let end = self.len.saturating_add(bytes.len());
-        if let Some(dst) = self.buf.get_mut(self.len..end) {
-            if bytes.is_ascii() {
-                // a zip, not copy_from_slice: no length-mismatch panic path
-                for (d, &b) in dst.iter_mut().zip(bytes) {
-                    *d = b;
-                }
-                self.len = end;
-                return Ok(());
-            }
-        }
         let free = self.buf.get_mut(self.len..).unwrap_or(&mut []);
         let n = bytes.len().min(free.len());
         for (d, &s) in free.iter_mut().zip(bytes) {
