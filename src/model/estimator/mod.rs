@@ -110,11 +110,11 @@
 //!
 //! | call | instructions |
 //! | --- | ---: |
-//! | predict Stop | 179 (169; 626) |
-//! | predict Straight | 644 (689; 1221) |
-//! | predict Turn | 715 (720; 1284) |
-//! | update_lidar (accepted, incl. its [`Beam`]) | 1519 (1362; 5368) |
-//! | update_heading (accepted) | 965 (837; 4527) |
+//! | predict Stop | 181 (169; 626) |
+//! | predict Straight | 663 (689; 1221) |
+//! | predict Turn | 741 (720; 1284) |
+//! | update_lidar (accepted, incl. its [`Beam`]) | 1570 (1362; 5368) |
+//! | update_heading (accepted) | 1021 (837; 4527) |
 //!
 //! Predict: [`advance`] on the pose in place (no `sin_cos` going straight,
 //! one turning, both from the pose's cache), the Jacobian and noise from
