@@ -145,3 +145,29 @@ fn the_config_line_reproduces_the_report_constant_and_round_trips() {
         assert_eq!(back, cal, "{line}");
     }
 }
+
+/// The bias is `(max + min) / 2` rounded half away from zero, for every
+/// sign and parity of the sum (the extremes come from two samples; ASA 128
+/// leaves the counts as they are).
+#[test]
+fn biases_round_half_away_from_zero() {
+    // (min, max) per case, and the bias the report's rule gives
+    let cases: [((i16, i16), i32); 8] = [
+        ((-3, 6), 2),          // 1.5 -> 2
+        ((-6, 3), -2),         // -1.5 -> -2
+        ((-4, 6), 1),          // 1
+        ((-6, 4), -1),         // -1
+        ((-5, 6), 1),          // 0.5 -> 1
+        ((-6, 5), -1),         // -0.5 -> -1
+        ((-32768, 32767), -1), // -0.5 -> -1, the widest the chip gives
+        ((100, 301), 201),     // 200.5 -> 201
+    ];
+    for ((lo, hi), want) in cases {
+        let exact = (f64::from(lo) + f64::from(hi)) / 2.0;
+        assert_eq!(exact.abs().round().copysign(exact) as i32, want, "the table: {lo}..{hi}");
+        let mut cal = MagCalibrator::new([128; 3], config::compass::AXES, 2, 0, i32::MAX);
+        cal.feed(MagCounts { x: lo, y: lo, z: lo });
+        assert_eq!(cal.feed(MagCounts { x: hi, y: hi, z: hi }), CalStatus::Done);
+        assert_eq!(cal.result().map(|c| c.bias), Ok([want; 3]), "{lo}..{hi}");
+    }
+}
