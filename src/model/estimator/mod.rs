@@ -775,14 +775,12 @@ fn bound_correlation_exact(pij: &mut i32, pii: i32, pjj: i32) -> u32 {
 }
 
 /// One covariance entry's part of a correction, `P_ij -= mul_hi(t_i,
-/// beta_j) 2^e` (saturating, [`shift`] inlined; see [`Estimator::correct`]).
+/// beta_j) 2^e` (saturating, [`shift_inline`]; see [`Estimator::correct`]).
 /// Out of line: one copy for the six entries is 220 B less code for ~3
 /// instructions each.
 #[inline(never)]
 fn remove(pij: &mut i32, ti: i32, bj: i32, e: i32) {
-    let v = mul_hi(ti, bj);
-    let d = if e <= 0 { v >> (-e).min(31) } else { shift_left(v, e) };
-    *pij = pij.saturating_sub(d);
+    *pij = pij.saturating_sub(shift_inline(mul_hi(ti, bj), e));
 }
 
 /// `beta / S` for one entry of `b`: `|b| 2^sb` times `y` (1/S, see
@@ -969,6 +967,13 @@ fn reciprocal(x: u32) -> u32 {
 /// instructions in all.
 #[inline(never)]
 fn shift(v: i32, e: i32) -> i32 {
+    shift_inline(v, e)
+}
+
+/// [`shift`]'s body, for [`remove`] to inline (a call from there costs the
+/// tick ~100 instructions).
+#[inline(always)]
+fn shift_inline(v: i32, e: i32) -> i32 {
     if e <= 0 {
         v >> (-e).min(31)
     } else {
