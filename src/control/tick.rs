@@ -709,15 +709,13 @@ where
 
     fn decide(&mut self, now: Stamp, sink: &mut impl LineSink) {
         if core::mem::take(&mut self.calibration_done) {
-            let result = self.calibrator.as_ref().map(MagCalibrator::result);
-            self.end_calibration(result, sink);
+            self.finish_sweep(sink);
             return;
         }
         let Some(timer) = self.mode.timer().copied() else { return };
         match timer.remaining_us(now) {
             Some(0) if matches!(self.mode, Mode::Calibrate { .. }) => {
-                let result = self.calibrator.as_ref().map(MagCalibrator::result);
-                self.end_calibration(result, sink);
+                self.finish_sweep(sink);
             }
             Some(0) => {
                 self.mode = Mode::Idle;
@@ -731,6 +729,14 @@ where
                 }
             }
         }
+    }
+
+    /// Ends the running sweep with its result (its samples are in, or its
+    /// time is up).
+    #[inline(always)]
+    fn finish_sweep(&mut self, sink: &mut impl LineSink) {
+        let result = self.calibrator.as_ref().map(MagCalibrator::result);
+        self.end_calibration(result, sink);
     }
 
     /// Ends a calibration sweep: applies and prints a good result, reports
