@@ -297,20 +297,16 @@ impl Cursor {
         }
     }
 
-    /// `sep` (unless 0), then `magnitude / 10^decimals` as in
-    /// [`push_fixed_parts`]: the length is counted first, then the text is
+    /// `magnitude / 10^decimals` as in [`push_fixed_parts`]: the length is counted first, then the text is
     /// written from its last byte, four digits per reciprocal multiply by
     /// 10^4 and one per multiply by the reciprocal of 10 (no division).
     #[inline(never)]
-    pub(super) fn number(&mut self, sep: u8, negative: bool, magnitude: u32, decimals: u32) {
+    pub(super) fn number(&mut self, negative: bool, magnitude: u32, decimals: u32) {
         let decimals = decimals.min(9) as usize;
         let minus = negative && magnitude != 0;
-        // digits <= 10 (u32::MAX has 10, decimals + 1 <= 10): text <= 13 bytes
+        // digits <= 10 (u32::MAX has 10, decimals + 1 <= 10): text <= 12 bytes
         let digits = digit_count(magnitude).max(decimals.wrapping_add(1));
-        let text_len = digits
-            .wrapping_add(usize::from(decimals > 0))
-            .wrapping_add(usize::from(minus))
-            .wrapping_add(usize::from(sep != 0));
+        let text_len = digits.wrapping_add(usize::from(decimals > 0)).wrapping_add(usize::from(minus));
         let end = self.len.wrapping_add(text_len); // both <= CURSOR
         if end > CURSOR {
             self.overflow = true;
@@ -342,9 +338,6 @@ impl Cursor {
             p = p.wrapping_sub(1);
             self.set(p, b'-');
         }
-        if sep != 0 {
-            self.set(p.wrapping_sub(1), sep);
-        }
         self.len = end;
     }
 
@@ -360,19 +353,9 @@ impl Cursor {
         self.set(*p, b'0'.wrapping_add(d as u8)); // d < 10
     }
 
-    /// `sep` (unless 0), then a signed scaled value.
-    #[inline(always)]
-    pub(super) fn signed(&mut self, sep: u8, v: i32, decimals: u32) {
-        self.number(sep, v < 0, v.unsigned_abs(), decimals);
-    }
-
-    /// A comma, then the value if there is one.
-    #[inline(never)]
-    pub(super) fn optional(&mut self, v: Option<i32>, decimals: u32) {
-        match v {
-            Some(v) => self.signed(b',', v, decimals),
-            None => self.push(b','),
-        }
+    /// Bytes left in the buffer.
+    pub(super) fn room(&self) -> usize {
+        CURSOR.saturating_sub(self.len)
     }
 
     /// Starts again at the beginning of the buffer.
@@ -404,7 +387,7 @@ impl Cursor {
 #[inline(never)]
 pub fn push_fixed_parts(out: &mut dyn TextOut, negative: bool, magnitude: u32, decimals: u32) -> Result<(), Overflow> {
     let mut text = Cursor::new();
-    text.number(0, negative, magnitude, decimals);
+    text.number(negative, magnitude, decimals);
     text.flush(out)
 }
 

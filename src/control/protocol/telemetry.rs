@@ -114,36 +114,240 @@ fn length_dmm(l: Length) -> i32 {
     h.wrapping_mul(10).wrapping_add(f.wrapping_mul(10).wrapping_add(1 << 15) >> 16)
 }
 
-impl From<&Telemetry> for TelemetryRow {
-    fn from(t: &Telemetry) -> TelemetryRow {
+/// A row as [`format_row`] writes it: one 32-bit cell per column (an
+/// `i32`'s bits in the [`SIGNED`] columns, 0 in the motion column), a mask
+/// of the empty columns (bit `i` for column `i`) and the motion.
+struct Cells {
+    v: [u32; COLUMNS],
+    empty: u32,
+    motion: MotionKind,
+}
+
+/// How [`Cells::write`] writes a column: the decimals in the low two bits,
+/// whether the cell's bits are an `i32`, or the motion word.
+const SIGNED: u8 = 4;
+const WORD: u8 = 8;
+/// Per column, in [`HEADER`] order.
+const FORMAT: [u8; COLUMNS] = [
+    0,          // t_ms
+    SIGNED | 1, // x_mm
+    SIGNED | 1, // y_mm
+    3,          // heading_deg
+    WORD,       // motion
+    SIGNED | 3, // v_mps
+    SIGNED | 3, // w_radps
+    2,          // left_cmd
+    2,          // right_cmd
+    0,          // front_raw_mm
+    SIGNED | 1, // front_mm
+    0,          // right_raw_mm
+    SIGNED | 1, // right_mm
+    SIGNED,     // mag_x
+    SIGNED,     // mag_y
+    SIGNED,     // mag_z
+    SIGNED,     // field_x
+    SIGNED,     // field_y
+    SIGNED,     // field_z
+    3,          // compass_deg
+    0,          // f_bus
+    0,          // f_timeout
+    0,          // f_missing
+    0,          // f_bad_sample
+    0,          // f_outliers
+    0,          // f_overruns
+];
+
+/// The first of the columns a reading fills (raw, then distance; raw x, y,
+/// z, field x, y, z, heading).
+const FRONT: u32 = 9;
+const RIGHT: u32 = 11;
+const COMPASS: u32 = 13;
+
+impl Cells {
+    /// The cells of `t` (the firmware's path: no [`TelemetryRow`] between).
+    fn of(t: &Telemetry) -> Cells {
         let (v_mm_s, w_mrad_s) = match t.motion {
             Motion::Stop => (0, 0),
             Motion::Straight(v) => (v.to_mm_s(), 0),
             Motion::Turn(w) => (0, w.to_mrad_s()),
         };
-        let raw = |s: &Option<LidarSample>| s.map(|s| s.raw_mm);
-        let dist = |s: &Option<LidarSample>| match s {
-            Some(LidarSample { range: Range::Target(d), .. }) => Some(length_dmm(*d)),
-            _ => None,
+        let mut empty = 0;
+        // raw reading and distance; a missing one leaves its columns empty
+        let mut lidar = |s: &Option<LidarSample>, column: u32| match s {
+            Some(LidarSample { raw_mm, range: Range::Target(d) }) => (u32::from(*raw_mm), length_dmm(*d) as u32),
+            Some(LidarSample { raw_mm, .. }) => {
+                empty |= 2 << column;
+                (u32::from(*raw_mm), 0)
+            }
+            None => {
+                empty |= 3 << column;
+                (0, 0)
+            }
         };
+        let (front_raw, front) = lidar(&t.front, FRONT);
+        let (right_raw, right) = lidar(&t.right, RIGHT);
+        let c = match &t.compass {
+            Some(c) => *c,
+            None => {
+                empty |= 0x7F << COMPASS;
+                CompassSample {
+                    raw: crate::model::compass::MagCounts { x: 0, y: 0, z: 0 },
+                    field: crate::model::compass::MagField { x: 0, y: 0, z: 0 },
+                    heading: crate::math::Angle::ZERO,
+                }
+            }
+        };
+        let f = &t.faults;
+        let v = [
+            t.t_ms,
+            length_dmm(t.pose.x.to_length()) as u32,
+            length_dmm(t.pose.y.to_length()) as u32,
+            t.pose.theta.to_millidegrees(),
+            0,
+            v_mm_s as u32,
+            w_mrad_s as u32,
+            t.left_cmd.to_centi(),
+            t.right_cmd.to_centi(),
+            front_raw,
+            front,
+            right_raw,
+            right,
+            i32::from(c.raw.x) as u32,
+            i32::from(c.raw.y) as u32,
+            i32::from(c.raw.z) as u32,
+            c.field.x as u32,
+            c.field.y as u32,
+            c.field.z as u32,
+            c.heading.to_millidegrees(),
+            f.bus,
+            f.timeout,
+            f.missing,
+            f.bad_sample,
+            f.rejected_outliers,
+            f.overruns,
+        ];
+        Cells { v, empty, motion: t.motion.kind() }
+    }
+
+    /// Appends the cells as CSV (no terminator): one loop over the columns
+    /// and their [`FORMAT`], into a local buffer that goes out in a few
+    /// pieces rather than byte by byte.
+    #[inline(never)]
+    fn write(&self, out: &mut dyn TextOut) -> Result<(), Overflow> {
+        let mut row = Cursor::new();
+        for i in 0..COLUMNS {
+            let (Some(&v), Some(&format)) = (self.v.get(i), FORMAT.get(i)) else { break };
+            // the widest column is 13 bytes with its comma (a u32 with 3
+            // decimals, or an i32 with 1): a piece goes out when fewer are left
+            if row.room() < 13 {
+                row.flush(out)?;
+                row.clear();
+            }
+            if i > 0 {
+                row.push(b',');
+            }
+            if self.empty >> i & 1 != 0 {
+                // an empty field
+            } else if format & WORD != 0 {
+                row.push_bytes(motion_word(self.motion).as_bytes());
+            } else {
+                let negative = format & SIGNED != 0 && (v as i32) < 0;
+                let magnitude = if negative { (v as i32).unsigned_abs() } else { v };
+                row.number(negative, magnitude, u32::from(format & 3));
+            }
+        }
+        row.flush(out)
+    }
+}
+
+impl From<&Telemetry> for TelemetryRow {
+    fn from(t: &Telemetry) -> TelemetryRow {
+        TelemetryRow::from_cells(&Cells::of(t))
+    }
+}
+
+impl TelemetryRow {
+    /// The row's cells (see [`Cells`]).
+    fn cells(&self) -> Cells {
+        let mut empty = 0;
+        // an Option's value, or 0 and its column marked empty
+        let mut cell = |v: Option<i32>, column: u32| {
+            v.map_or_else(
+                || {
+                    empty |= 1 << column;
+                    0
+                },
+                |v| v as u32,
+            )
+        };
+        let axis = |g: Option<[i32; 3]>, k: usize| g.and_then(|m| m.get(k).copied());
+        let (raw, field) = (self.mag_raw.map(|m| m.map(i32::from)), self.mag_field);
+        let f = &self.faults;
+        let v = [
+            self.t_ms,
+            self.x_dmm as u32,
+            self.y_dmm as u32,
+            self.heading_mdeg,
+            0,
+            self.v_mm_s as u32,
+            self.w_mrad_s as u32,
+            self.left_cmd_centi,
+            self.right_cmd_centi,
+            cell(self.front_raw_mm.map(i32::from), FRONT),
+            cell(self.front_dmm, FRONT + 1),
+            cell(self.right_raw_mm.map(i32::from), RIGHT),
+            cell(self.right_dmm, RIGHT + 1),
+            cell(axis(raw, 0), COMPASS),
+            cell(axis(raw, 1), COMPASS + 1),
+            cell(axis(raw, 2), COMPASS + 2),
+            cell(axis(field, 0), COMPASS + 3),
+            cell(axis(field, 1), COMPASS + 4),
+            cell(axis(field, 2), COMPASS + 5),
+            // a u32's bits (the column is unsigned)
+            cell(self.compass_mdeg.map(|d| d as i32), COMPASS + 6),
+            f.bus,
+            f.timeout,
+            f.missing,
+            f.bad_sample,
+            f.rejected_outliers,
+            f.overruns,
+        ];
+        Cells { v, empty, motion: self.motion }
+    }
+
+    /// The row that `cells` hold (the inverse of [`TelemetryRow::cells`];
+    /// a group of magnetometer axes is present when its first column is).
+    fn from_cells(c: &Cells) -> TelemetryRow {
+        let at = |i: u32| c.v.get(i as usize).copied().unwrap_or(0);
+        let opt = |i: u32| (c.empty >> i & 1 == 0).then(|| at(i) as i32);
+        let group = |i: u32| opt(i).map(|_| [at(i) as i32, at(i.wrapping_add(1)) as i32, at(i.wrapping_add(2)) as i32]);
         TelemetryRow {
-            t_ms: t.t_ms,
-            x_dmm: length_dmm(t.pose.x.to_length()),
-            y_dmm: length_dmm(t.pose.y.to_length()),
-            heading_mdeg: t.pose.theta.to_millidegrees(),
-            motion: t.motion.kind(),
-            v_mm_s,
-            w_mrad_s,
-            left_cmd_centi: t.left_cmd.to_centi(),
-            right_cmd_centi: t.right_cmd.to_centi(),
-            front_raw_mm: raw(&t.front),
-            front_dmm: dist(&t.front),
-            right_raw_mm: raw(&t.right),
-            right_dmm: dist(&t.right),
-            mag_raw: t.compass.map(|c| [c.raw.x, c.raw.y, c.raw.z]),
-            mag_field: t.compass.map(|c| [c.field.x, c.field.y, c.field.z]),
-            compass_mdeg: t.compass.map(|c| c.heading.to_millidegrees()),
-            faults: t.faults,
+            t_ms: at(0),
+            x_dmm: at(1) as i32,
+            y_dmm: at(2) as i32,
+            heading_mdeg: at(3),
+            motion: c.motion,
+            v_mm_s: at(5) as i32,
+            w_mrad_s: at(6) as i32,
+            left_cmd_centi: at(7),
+            right_cmd_centi: at(8),
+            // a raw reading is a u16 (from a LidarSample)
+            front_raw_mm: opt(FRONT).map(|r| r as u16),
+            front_dmm: opt(FRONT + 1),
+            right_raw_mm: opt(RIGHT).map(|r| r as u16),
+            right_dmm: opt(RIGHT + 1),
+            // the raw axes are i16 (from MagCounts)
+            mag_raw: group(COMPASS).map(|m| m.map(|a| a as i16)),
+            mag_field: group(COMPASS + 3),
+            compass_mdeg: opt(COMPASS + 6).map(|d| d as u32),
+            faults: FaultCounters {
+                bus: at(20),
+                timeout: at(21),
+                missing: at(22),
+                bad_sample: at(23),
+                rejected_outliers: at(24),
+                overruns: at(25),
+            },
         }
     }
 }
@@ -151,52 +355,13 @@ impl From<&Telemetry> for TelemetryRow {
 /// Appends one telemetry row (no terminator) for `t`. On [`Overflow`] the
 /// string holds a partial row: clear it. A `String<`[`MAX_ROW`]`>` always fits.
 pub fn format_telemetry(t: &Telemetry, out: &mut dyn TextOut) -> Result<(), Overflow> {
-    format_row(&TelemetryRow::from(t), out)
+    Cells::of(t).write(out)
 }
 
-/// Appends a row's values as CSV (no terminator), column by column into a
-/// local buffer that goes out in three pieces rather than byte by byte.
-#[inline(never)]
+/// Appends a row's values as CSV (no terminator), as [`format_telemetry`]
+/// writes the telemetry it came from.
 pub fn format_row(r: &TelemetryRow, out: &mut dyn TextOut) -> Result<(), Overflow> {
-    // Widest columns of any TelemetryRow (not only one from Telemetry):
-    // 0..=8 (t_ms 10, x/y 12 each, heading 11, motion 4, v/w 12 each,
-    // commands 11 each) 103 bytes with their commas, 9..=19 (raw 5, distance
-    // 12, twice; mag 6 x 3, field 11 x 3, compass 11) 107 with the comma in
-    // front, 20..=25 (counters 10 x 6) 66: each piece fits a Cursor.
-    let mut row = Cursor::new();
-    let f = &r.faults;
-    row.number(0, false, r.t_ms, 0);
-    row.signed(b',', r.x_dmm, 1);
-    row.signed(b',', r.y_dmm, 1);
-    row.number(b',', false, r.heading_mdeg, 3);
-    row.push(b',');
-    row.push_bytes(motion_word(r.motion).as_bytes());
-    row.signed(b',', r.v_mm_s, 3);
-    row.signed(b',', r.w_mrad_s, 3);
-    row.number(b',', false, r.left_cmd_centi, 2);
-    row.number(b',', false, r.right_cmd_centi, 2);
-    row.flush(out)?;
-    row.clear();
-    row.optional(r.front_raw_mm.map(i32::from), 0);
-    row.optional(r.front_dmm, 1);
-    row.optional(r.right_raw_mm.map(i32::from), 0);
-    row.optional(r.right_dmm, 1);
-    let raw = r.mag_raw.map(|m| m.map(i32::from));
-    for group in [raw, r.mag_field] {
-        for k in 0..3 {
-            row.optional(group.and_then(|m| m.get(k).copied()), 0);
-        }
-    }
-    match r.compass_mdeg {
-        Some(d) => row.number(b',', false, d, 3),
-        None => row.push(b','),
-    }
-    row.flush(out)?;
-    row.clear();
-    for count in [f.bus, f.timeout, f.missing, f.bad_sample, f.rejected_outliers, f.overruns] {
-        row.number(b',', false, count, 0);
-    }
-    row.flush(out)
+    r.cells().write(out)
 }
 
 /// What kind of line came from the robot.
