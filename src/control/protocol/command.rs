@@ -85,62 +85,57 @@ pub enum Field {
     Rate,
 }
 
+/// What [`Field`]'s methods report, one table row per field.
+struct FieldSpec {
+    name: &'static str,
+    unit: &'static str,
+    decimals: u32,
+    range: Option<(i32, i32)>,
+}
+
+// every limit is a small config constant (<= 360_000): the casts are exact
+const fn spec(name: &'static str, unit: &'static str, decimals: u32, lo: i32, hi: i32) -> FieldSpec {
+    FieldSpec { name, unit, decimals, range: Some((lo, hi)) }
+}
+
+/// In [`Field`]'s declaration order.
+static FIELDS: [FieldSpec; 12] = [
+    spec("speed", "m/s", 3, 1, serial::MAX_SPEED_MM_S as i32),
+    spec("turn rate", "rad/s", 3, 1, serial::MAX_TURN_MRAD_S as i32),
+    spec("duration", "s", 3, 1, serial::MAX_DURATION_MS as i32),
+    spec("left command", "", 2, 0, 18_000),
+    spec("right command", "", 2, 0, 18_000),
+    FieldSpec { name: "side", unit: "", decimals: 0, range: None },
+    spec("trim", "steps", 2, (serial::MAX_TRIM_CENTI as i32).wrapping_neg(), serial::MAX_TRIM_CENTI as i32),
+    spec("x", "mm", 0, (serial::MAX_POSE_MM as i32).wrapping_neg(), serial::MAX_POSE_MM as i32),
+    spec("y", "mm", 0, (serial::MAX_POSE_MM as i32).wrapping_neg(), serial::MAX_POSE_MM as i32),
+    spec("heading", "deg", 3, -360_000, 360_000),
+    spec("samples", "", 0, serial::MIN_CAL_SAMPLES as i32, serial::MAX_CAL_SAMPLES as i32),
+    spec("rate", "Hz", 0, 0, serial::MAX_TELEMETRY_HZ as i32),
+];
+
 impl Field {
+    fn spec(self) -> &'static FieldSpec {
+        // the table has a row per variant: `get` never fails
+        FIELDS.get(self as usize).unwrap_or(&FIELDS[0])
+    }
     /// The name used in messages.
-    pub const fn name(self) -> &'static str {
-        match self {
-            Field::Speed => "speed",
-            Field::TurnRate => "turn rate",
-            Field::Duration => "duration",
-            Field::LeftCommand => "left command",
-            Field::RightCommand => "right command",
-            Field::Side => "side",
-            Field::Trim => "trim",
-            Field::X => "x",
-            Field::Y => "y",
-            Field::Heading => "heading",
-            Field::Samples => "samples",
-            Field::Rate => "rate",
-        }
+    pub fn name(self) -> &'static str {
+        self.spec().name
     }
     /// The unit the user writes (empty for plain counts).
-    pub const fn unit(self) -> &'static str {
-        match self {
-            Field::Speed => "m/s",
-            Field::TurnRate => "rad/s",
-            Field::Duration => "s",
-            Field::LeftCommand | Field::RightCommand | Field::Side | Field::Samples => "",
-            Field::Trim => "steps",
-            Field::X | Field::Y => "mm",
-            Field::Heading => "deg",
-            Field::Rate => "Hz",
-        }
+    pub fn unit(self) -> &'static str {
+        self.spec().unit
     }
     /// Decimal places accepted (the value's resolution).
-    pub const fn decimals(self) -> u32 {
-        match self {
-            Field::Speed | Field::TurnRate | Field::Duration | Field::Heading => 3,
-            Field::LeftCommand | Field::RightCommand | Field::Trim => 2,
-            Field::Side | Field::X | Field::Y | Field::Samples | Field::Rate => 0,
-        }
+    pub fn decimals(self) -> u32 {
+        self.spec().decimals
     }
     /// Accepted range, inclusive, in units of `10^-decimals` (speed in mm/s,
     /// turn rate in mrad/s, duration in ms, commands and trim in 1/100 step,
     /// heading in millidegrees). `None` for [`Field::Side`] (not a number).
-    pub const fn range(self) -> Option<(i32, i32)> {
-        // every limit is a small config constant (<= 360_000): the casts are exact
-        Some(match self {
-            Field::Speed => (1, serial::MAX_SPEED_MM_S as i32),
-            Field::TurnRate => (1, serial::MAX_TURN_MRAD_S as i32),
-            Field::Duration => (1, serial::MAX_DURATION_MS as i32),
-            Field::LeftCommand | Field::RightCommand => (0, 18_000),
-            Field::Trim => ((serial::MAX_TRIM_CENTI as i32).wrapping_neg(), serial::MAX_TRIM_CENTI as i32),
-            Field::X | Field::Y => ((serial::MAX_POSE_MM as i32).wrapping_neg(), serial::MAX_POSE_MM as i32),
-            Field::Heading => (-360_000, 360_000),
-            Field::Samples => (serial::MIN_CAL_SAMPLES as i32, serial::MAX_CAL_SAMPLES as i32),
-            Field::Rate => (0, serial::MAX_TELEMETRY_HZ as i32),
-            Field::Side => return None,
-        })
+    pub fn range(self) -> Option<(i32, i32)> {
+        self.spec().range
     }
 }
 
@@ -237,27 +232,18 @@ fn is_allowed(b: u8) -> bool {
     (0x20..0x7F).contains(&b) || is_space(&b)
 }
 
-/// The argument words after the command word.
-struct Args<'a, I: Iterator<Item = &'a [u8]>>(I);
-
-impl<'a, I: Iterator<Item = &'a [u8]>> Args<'a, I> {
-    fn required(&mut self, f: Field) -> Result<&'a [u8], ParseError> {
-        self.0.next().ok_or(ParseError::MissingArgument(f))
+/// `f`'s value in `token`: a number in `f`'s range and resolution, scaled
+/// by `10^decimals`, or for [`Field::Side`] 0 (left) or 1 (right).
+fn value(token: &[u8], f: Field) -> Result<i32, ParseError> {
+    if f != Field::Side {
+        return number(token, f);
     }
-    /// A number in `f`'s range and resolution, scaled by `10^decimals`.
-    fn number(&mut self, f: Field) -> Result<i32, ParseError> {
-        let token = self.required(f)?;
-        number(token, f)
-    }
-    /// The optional trailing duration in seconds (`2.5` or `2.5s`), in ms.
-    fn duration(&mut self) -> Result<Option<u32>, ParseError> {
-        let Some(token) = self.0.next() else { return Ok(None) };
-        let token = match token.split_last() {
-            Some((b's' | b'S', rest)) => rest,
-            _ => token,
-        };
-        // range 1..=MAX_DURATION_MS: non-negative
-        number(token, Field::Duration).map(|ms| Some(ms.unsigned_abs()))
+    if token.eq_ignore_ascii_case(b"left") || token.eq_ignore_ascii_case(b"l") {
+        Ok(0)
+    } else if token.eq_ignore_ascii_case(b"right") || token.eq_ignore_ascii_case(b"r") {
+        Ok(1)
+    } else {
+        Err(ParseError::BadChoice(Field::Side))
     }
 }
 
@@ -326,6 +312,25 @@ enum Keyword {
     Help,
 }
 
+impl Keyword {
+    /// The required arguments, in order, and the optional one that may
+    /// follow them ([`Field::Duration`] in seconds, `2.5` or `2.5s`, or
+    /// [`Field::Samples`]).
+    fn grammar(self) -> (&'static [Field], Option<Field>) {
+        const DURATION: Option<Field> = Some(Field::Duration);
+        match self {
+            Keyword::Forward | Keyword::Backward => (&[Field::Speed], DURATION),
+            Keyword::Cw | Keyword::Ccw => (&[Field::TurnRate], DURATION),
+            Keyword::Servo => (&[Field::LeftCommand, Field::RightCommand], DURATION),
+            Keyword::Trim => (&[Field::Side, Field::Trim], None),
+            Keyword::Pose => (&[Field::X, Field::Y, Field::Heading], None),
+            Keyword::Calibrate => (&[], Some(Field::Samples)),
+            Keyword::Rate => (&[Field::Rate], None),
+            Keyword::Stop | Keyword::Reset | Keyword::Status | Keyword::Help => (&[], None),
+        }
+    }
+}
+
 /// Parses one command line (without its terminator; trailing `\r`/`\n` are
 /// whitespace). Words are separated by spaces or tabs; keywords are
 /// case-insensitive. Never panics, allocates nothing.
@@ -343,63 +348,54 @@ pub fn parse(line: &[u8]) -> Result<Command, ParseError> {
         .find(|(name, _)| name.as_bytes().eq_ignore_ascii_case(word))
         .map(|&(_, k)| k)
         .ok_or(ParseError::UnknownCommand)?;
-    let mut args = Args(words);
-    let command = match keyword {
-        Keyword::Forward | Keyword::Backward => {
-            let mm_s = args.number(Field::Speed)?; // 1..=MAX_SPEED_MM_S
-            let v = Speed::from_mm_s(mm_s);
-            let v = if matches!(keyword, Keyword::Backward) { v.neg() } else { v };
-            Command::Drive { motion: Motion::Straight(v), duration_ms: args.duration()? }
-        }
-        Keyword::Cw | Keyword::Ccw => {
-            let mrad_s = args.number(Field::TurnRate)?; // 1..=MAX_TURN_MRAD_S
-            let w = TurnRate::from_mrad_s(mrad_s);
-            let w = if matches!(keyword, Keyword::Ccw) { w.neg() } else { w };
-            Command::Drive { motion: Motion::Turn(w), duration_ms: args.duration()? }
-        }
-        Keyword::Stop => Command::Stop,
-        Keyword::Servo => {
-            let left = args.number(Field::LeftCommand)?; // 0..=18_000
-            let right = args.number(Field::RightCommand)?;
-            Command::Servo {
-                left: ServoCmd::from_q8_signed(centi_to_q8(left)),
-                right: ServoCmd::from_q8_signed(centi_to_q8(right)),
-                duration_ms: args.duration()?,
-            }
-        }
-        Keyword::Trim => {
-            let word = args.required(Field::Side)?;
-            let side = if word.eq_ignore_ascii_case(b"left") || word.eq_ignore_ascii_case(b"l") {
-                Side::Left
-            } else if word.eq_ignore_ascii_case(b"right") || word.eq_ignore_ascii_case(b"r") {
-                Side::Right
-            } else {
-                return Err(ParseError::BadChoice(Field::Side));
+    // the required arguments (at most three), in the fields' units
+    let (fields, optional) = keyword.grammar();
+    let mut v = [0; 3];
+    for (slot, &f) in v.iter_mut().zip(fields) {
+        let token = words.next().ok_or(ParseError::MissingArgument(f))?;
+        *slot = value(token, f)?;
+    }
+    let mut extra = None;
+    if let Some(f) = optional {
+        if let Some(token) = words.next() {
+            let token = match token.split_last() {
+                Some((b's' | b'S', rest)) if f == Field::Duration => rest,
+                _ => token,
             };
-            let centi = args.number(Field::Trim)?; // |.| <= MAX_TRIM_CENTI <= 12_700
-            Command::Trim { side, trim: Trim(centi_to_q8(centi) as i16) }
+            extra = Some(number(token, f)?);
         }
-        Keyword::Pose => Command::SetPose {
-            x_mm: args.number(Field::X)?,
-            y_mm: args.number(Field::Y)?,
-            heading: Angle::from_millidegrees(args.number(Field::Heading)?),
-        },
-        Keyword::Reset => Command::SetPose { x_mm: 0, y_mm: 0, heading: Angle::ZERO },
-        Keyword::Calibrate => {
-            let samples = match args.0.next() {
-                None => compass::CALIBRATION_SAMPLES,
-                Some(token) => number(token, Field::Samples)? as u16, // MIN..=MAX_CAL_SAMPLES
-            };
-            Command::Calibrate { samples }
-        }
-        Keyword::Rate => Command::Rate { hz: args.number(Field::Rate)? as u16 }, // 0..=MAX_TELEMETRY_HZ
-        Keyword::Status => Command::Status,
-        Keyword::Help => Command::Help,
-    };
-    if args.0.next().is_some() {
+    }
+    if words.next().is_some() {
         return Err(ParseError::TrailingInput);
     }
-    Ok(command)
+    // ranges: duration 1..=MAX_DURATION_MS, samples MIN..=MAX_CAL_SAMPLES
+    // (<= u16::MAX), rate 0..=MAX_TELEMETRY_HZ: the casts are exact
+    let duration_ms = extra.map(i32::unsigned_abs);
+    let [a, b, c] = v;
+    Ok(match keyword {
+        // speed 1..=MAX_SPEED_MM_S, turn rate 1..=MAX_TURN_MRAD_S
+        Keyword::Forward => Command::Drive { motion: Motion::Straight(Speed::from_mm_s(a)), duration_ms },
+        Keyword::Backward => Command::Drive { motion: Motion::Straight(Speed::from_mm_s(a).neg()), duration_ms },
+        Keyword::Cw => Command::Drive { motion: Motion::Turn(TurnRate::from_mrad_s(a)), duration_ms },
+        Keyword::Ccw => Command::Drive { motion: Motion::Turn(TurnRate::from_mrad_s(a).neg()), duration_ms },
+        Keyword::Stop => Command::Stop,
+        // commands 0..=18_000
+        Keyword::Servo => Command::Servo {
+            left: ServoCmd::from_q8_signed(centi_to_q8(a)),
+            right: ServoCmd::from_q8_signed(centi_to_q8(b)),
+            duration_ms,
+        },
+        // |trim| <= MAX_TRIM_CENTI <= 12_700
+        Keyword::Trim => {
+            Command::Trim { side: if a == 0 { Side::Left } else { Side::Right }, trim: Trim(centi_to_q8(b) as i16) }
+        }
+        Keyword::Pose => Command::SetPose { x_mm: a, y_mm: b, heading: Angle::from_millidegrees(c) },
+        Keyword::Reset => Command::SetPose { x_mm: 0, y_mm: 0, heading: Angle::ZERO },
+        Keyword::Calibrate => Command::Calibrate { samples: extra.map_or(compass::CALIBRATION_SAMPLES, |n| n as u16) },
+        Keyword::Rate => Command::Rate { hz: a as u16 },
+        Keyword::Status => Command::Status,
+        Keyword::Help => Command::Help,
+    })
 }
 
 /// ` <seconds>` with three decimals, if there is a duration.
