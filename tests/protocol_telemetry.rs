@@ -7,7 +7,7 @@ mod common;
 use common::rng::Rng;
 use heapless::String;
 use paperbot::control::protocol::number::{
-    div_rem_1000, div_rem_10k, parse_fixed, push_fixed, push_fixed_parts, put_template, Arg, NumError, TextOut,
+    div_rem_1000, div_rem_10k, parse_fixed, push_fixed, push_fixed_parts, put_template, NumError, TextOut,
 };
 use paperbot::control::protocol::{
     classify_line, format_row, format_status, format_telemetry, parse_telemetry_row, telemetry_header, FaultCounters,
@@ -383,33 +383,44 @@ fn integer_decimal_formatting() {
     assert!(push_fixed(&mut tiny, -1234, 1).is_err());
 }
 
-/// Templates: each `%` takes the next argument, numbers as `push_fixed_parts`
-/// writes them, text as `push_text` (anything but printable ASCII is `?`).
+/// Templates: each `%` and its code takes the next value of its kind:
+/// `0`..`9` an unsigned number with that many decimals and `a`..`j` an
+/// i32's bits (as `push_fixed_parts` / `push_fixed` write them), `s` a text
+/// (as `push_text`: anything but printable ASCII is `?`).
 #[test]
 fn template_lines() {
-    let cases: &[(&str, &[Arg], &str)] = &[
-        ("no slots", &[], "no slots"),
-        ("", &[], ""),
-        ("%", &[Arg::int(7)], "7"),
-        ("a=% b=%", &[Arg::fixed(-1234, 2), Arg::Num(false, 5, 3)], "a=-12.34 b=0.005"),
-        ("%%%", &[Arg::Text("x"), Arg::fixed(0, 1), Arg::Text("")], "x0.0"),
-        ("-0: %", &[Arg::Num(true, 0, 2)], "-0: 0.00"),
-        ("max % min %", &[Arg::int(u32::MAX), Arg::fixed(i32::MIN, 0)], "max 4294967295 min -2147483648"),
-        ("text % end", &[Arg::Text("tab\there\u{e9}\n")], "text tab?here??? end"),
-        ("% and % (one argument short)", &[Arg::int(1)], "1 and  (one argument short)"),
-        ("% (one argument too many)", &[Arg::int(1), Arg::int(2)], "1 (one argument too many)"),
+    type Case<'a> = (&'a str, &'a [u32], &'a [&'a str], &'a str);
+    let cases: &[Case] = &[
+        ("no slots", &[], &[], "no slots"),
+        ("", &[], &[], ""),
+        ("%0", &[7], &[], "7"),
+        ("a=%c b=%3", &[-1234i32 as u32, 5], &[], "a=-12.34 b=0.005"),
+        ("%s%b%s", &[0], &["x", ""], "x0.0"),
+        ("-0: %c", &[0], &[], "-0: 0.00"),
+        ("%j %9", &[-1i32 as u32, 1], &[], "-0.000000001 0.000000001"),
+        ("max %0 min %a", &[u32::MAX, i32::MIN as u32], &[], "max 4294967295 min -2147483648"),
+        ("2^31: %0 %a", &[1 << 31, 1 << 31], &[], "2^31: 2147483648 -2147483648"),
+        ("text %s end", &[], &["tab\there\u{e9}\n"], "text tab?here??? end"),
+        // values of each kind are taken in order, whatever the other kind does
+        ("%s=%0, %s=%a", &[1, -2i32 as u32], &["one", "two"], "one=1, two=-2"),
+        ("%0 and %0 (one number short)", &[1], &[], "1 and  (one number short)"),
+        ("%0 (one number too many)", &[1, 2], &[], "1 (one number too many)"),
+        ("%s (a text short) %s", &[], &["t"], "t (a text short) "),
+        // an unknown code, and a slot at the end, write nothing and take nothing
+        ("%x%0 %", &[4], &[], "4 "),
+        ("100%% sure", &[], &[], "100 sure"),
     ];
-    for &(template, args, want) in cases {
+    for &(template, nums, texts, want) in cases {
         let mut out: String<64> = String::new();
-        put_template(&mut out, template, args).expect("fits");
+        put_template(&mut out, template, nums, texts).expect("fits");
         assert_eq!(out.as_str(), want, "{template:?}");
         let mut line: OutLine<64> = OutLine::new();
-        put_template(&mut line, template, args).expect("fits");
+        put_template(&mut line, template, nums, texts).expect("fits");
         assert_eq!(&*line, want, "{template:?} into an OutLine");
     }
     // too long: an error, with what fitted kept
     let mut tiny: String<8> = String::new();
-    assert_eq!(put_template(&mut tiny, "abc % def", &[Arg::int(12_345)]), Err(Overflow));
+    assert_eq!(put_template(&mut tiny, "abc %0 def", &[12_345], &[]), Err(Overflow));
     assert_eq!(tiny.as_str(), "abc 1234");
 }
 

@@ -43,7 +43,7 @@
 //! clock difference is wrapping or saturating, every index is checked.
 
 use crate::config;
-use crate::control::protocol::number::{div_rem_1000, push_str, put_template, Arg, TextOut};
+use crate::control::protocol::number::{div_rem_1000, push_str, put_template, TextOut};
 use crate::control::protocol::Overflow;
 use crate::control::protocol::{
     format_response, format_status, format_telemetry, telemetry_header, Command, FaultCounters, LineBuffer, OutLine,
@@ -947,27 +947,26 @@ fn calibration_report(
     samples: u16,
     sectors: u8,
 ) -> Result<(), Overflow> {
-    let n = |v: u8| Arg::int(u32::from(v));
-    let samples = Arg::int(u32::from(samples));
+    let samples = u32::from(samples);
     match result {
-        None => put_template(t, "# calibration abandoned after % samples", &[samples]),
+        None => put_template(t, "# calibration abandoned after %0 samples", &[samples], &[]),
         Some(Ok(_)) => put_template(
             t,
-            "# calibration ok: % samples, % of 12 sectors; applied. For config::compass:",
-            &[samples, n(sectors)],
+            "# calibration ok: %0 samples, %0 of 12 sectors; applied. For config::compass:",
+            &[samples, u32::from(sectors)],
+            &[],
         ),
-        Some(Err(CalibrationError::NotEnoughSamples { have, need })) => put_template(
-            t,
-            "# err calibration timed out: % of % samples",
-            &[Arg::int(u32::from(have)), Arg::int(u32::from(need))],
-        ),
+        Some(Err(CalibrationError::NotEnoughSamples { have, need })) => {
+            put_template(t, "# err calibration timed out: %0 of %0 samples", &[u32::from(have), u32::from(need)], &[])
+        }
         Some(Err(CalibrationError::SweepIncomplete { sectors, need })) => put_template(
             t,
-            "# err calibration failed: the turn covered % of 12 sectors, need %",
-            &[n(sectors), n(need)],
+            "# err calibration failed: the turn covered %0 of 12 sectors, need %0",
+            &[u32::from(sectors), u32::from(need)],
+            &[],
         ),
         Some(Err(CalibrationError::Degenerate { axis })) => {
-            put_template(t, "# err calibration failed: magnetometer axis % never changed", &[n(axis)])
+            put_template(t, "# err calibration failed: magnetometer axis %0 never changed", &[u32::from(axis)], &[])
         }
     }
 }
@@ -976,13 +975,17 @@ fn calibration_report(
 /// (the same text as `driver::calibration::ConfigLine`, written without
 /// `core::fmt`): biases as integers, scales with six decimals.
 fn push_config_line(out: &mut dyn TextOut, cal: &MagCalibration) -> Result<(), Overflow> {
-    let [b0, b1, b2] = cal.bias.map(|b| Arg::fixed(b, 0));
-    // q16 * 10^6 / 2^16 rounded half away from zero (as math::div_round)
-    let [s0, s1, s2] = cal.scale_q16.map(|q16| Arg::Num(q16 < 0, q16_to_micro(q16.unsigned_abs()), 6));
+    let [b0, b1, b2] = cal.bias;
+    // q16 * 10^6 / 2^16 rounded half away from zero (as math::div_round):
+    // the sign as text, as a magnitude may pass i32::MAX (and |q16| >= 1
+    // gives at least 15 millionths: no "-0")
+    let [m0, m1, m2] = cal.scale_q16.map(|q16| q16_to_micro(q16.unsigned_abs()));
+    let [n0, n1, n2] = cal.scale_q16.map(|q16| if q16 < 0 { "-" } else { "" });
     put_template(
         out,
-        "pub const CALIBRATION: MagCalibration = MagCalibration::from_f64([%.0, %.0, %.0], [%, %, %]);",
-        &[b0, b1, b2, s0, s1, s2],
+        "pub const CALIBRATION: MagCalibration = MagCalibration::from_f64([%a.0, %a.0, %a.0], [%s%6, %s%6, %s%6]);",
+        &[b0 as u32, b1 as u32, b2 as u32, m0, m1, m2],
+        &[n0, n1, n2],
     )
 }
 

@@ -1,7 +1,7 @@
 //! Commands: the grammar (see the module docs of [`super`]), the parser and
 //! the canonical form that `ok` responses echo.
 
-use super::number::{parse_fixed, push_str, put_template, Arg, NumError, TextOut};
+use super::number::{parse_fixed, push_str, put_template, NumError, TextOut};
 use super::{Overflow, MAX_LINE};
 use crate::config::{compass, serial};
 use crate::math::{Angle, Speed, TurnRate};
@@ -181,19 +181,19 @@ impl ParseError {
         match *self {
             ParseError::Empty => push_str(out, "empty line"),
             // MAX_LINE <= 255 (asserted)
-            ParseError::TooLong => put_template(out, "line too long, max % bytes", &[Arg::int(MAX_LINE as u32)]),
+            ParseError::TooLong => put_template(out, "line too long, max %0 bytes", &[MAX_LINE as u32], &[]),
             ParseError::NotAscii => push_str(out, "line has a byte that is not printable ASCII"),
             ParseError::UnknownCommand => push_str(out, "unknown command, try help"),
             ParseError::MissingArgument(f) => {
-                put_template(out, "missing %, want ", &[Arg::Text(f.name())])?;
+                put_template(out, "missing %s, want ", &[], &[f.name()])?;
                 write_want(out, f)
             }
             ParseError::BadNumber(f) | ParseError::BadChoice(f) => {
-                put_template(out, "bad %, want ", &[Arg::Text(f.name())])?;
+                put_template(out, "bad %s, want ", &[], &[f.name()])?;
                 write_want(out, f)
             }
             ParseError::OutOfRange(f) => {
-                put_template(out, "% out of range ", &[Arg::Text(f.name())])?;
+                put_template(out, "%s out of range ", &[], &[f.name()])?;
                 write_range(out, f)
             }
             ParseError::TrailingInput => push_str(out, "unexpected input after the arguments"),
@@ -210,7 +210,7 @@ fn write_want(out: &mut dyn TextOut, f: Field) -> Result<(), Overflow> {
     push_str(out, if f.decimals() == 0 { "an integer " } else { "a number " })?;
     write_range(out, f)?;
     if f.decimals() > 0 {
-        put_template(out, " with up to % decimals", &[Arg::int(f.decimals())])?;
+        put_template(out, " with up to %0 decimals", &[f.decimals()], &[])?;
     }
     Ok(())
 }
@@ -218,9 +218,12 @@ fn write_want(out: &mut dyn TextOut, f: Field) -> Result<(), Overflow> {
 /// "0.001..0.300 m/s" ("left or right" for the trim side)
 fn write_range(out: &mut dyn TextOut, f: Field) -> Result<(), Overflow> {
     let Some((lo, hi)) = f.range() else { return push_str(out, "left or right") };
-    let (d, unit) = (f.decimals(), f.unit());
+    // the field's decimals (<= 3) pick the slots' code
+    const RANGE: [&str; 4] = ["%a..%a%s%s", "%b..%b%s%s", "%c..%c%s%s", "%d..%d%s%s"];
+    let template = RANGE.get(f.decimals() as usize).copied().unwrap_or("");
+    let unit = f.unit();
     let space = if unit.is_empty() { "" } else { " " };
-    put_template(out, "%..%%%", &[Arg::fixed(lo, d), Arg::fixed(hi, d), Arg::Text(space), Arg::Text(unit)])
+    put_template(out, template, &[lo as u32, hi as u32], &[space, unit])
 }
 
 fn is_space(b: &u8) -> bool {
@@ -401,7 +404,7 @@ pub fn parse(line: &[u8]) -> Result<Command, ParseError> {
 /// ` <seconds>` with three decimals, if there is a duration.
 fn push_duration(out: &mut dyn TextOut, duration_ms: Option<u32>) -> Result<(), Overflow> {
     match duration_ms {
-        Some(ms) => put_template(out, " %", &[Arg::Num(false, ms, 3)]),
+        Some(ms) => put_template(out, " %3", &[ms], &[]),
         None => Ok(()),
     }
 }
@@ -418,26 +421,23 @@ pub fn format_command(cmd: &Command, out: &mut dyn TextOut) -> Result<(), Overfl
                 Motion::Turn(w) => (if w.to_bits() < 0 { "ccw" } else { "cw" }, w.to_mrad_s()),
                 Motion::Stop => return push_str(out, "stop"),
             };
-            put_template(out, "% %", &[Arg::Text(word), Arg::fixed(value.saturating_abs(), 3)])?;
+            put_template(out, "%s %3", &[value.unsigned_abs()], &[word])?;
             push_duration(out, duration_ms)
         }
         Command::Stop => push_str(out, "stop"),
         Command::Servo { left, right, duration_ms } => {
-            let (l, r) = (Arg::Num(false, left.to_centi(), 2), Arg::Num(false, right.to_centi(), 2));
-            put_template(out, "servo % %", &[l, r])?;
+            put_template(out, "servo %2 %2", &[left.to_centi(), right.to_centi()], &[])?;
             push_duration(out, duration_ms)
         }
         Command::Trim { side, trim } => {
             let word = if side == Side::Left { "left" } else { "right" };
-            put_template(out, "trim % %", &[Arg::Text(word), Arg::fixed(q8_to_centi(i32::from(trim.0)), 2)])
+            put_template(out, "trim %s %c", &[q8_to_centi(i32::from(trim.0)) as u32], &[word])
         }
-        Command::SetPose { x_mm, y_mm, heading } => put_template(
-            out,
-            "pose % % %",
-            &[Arg::fixed(x_mm, 0), Arg::fixed(y_mm, 0), Arg::Num(false, heading.to_millidegrees(), 3)],
-        ),
-        Command::Calibrate { samples } => put_template(out, "cal %", &[Arg::int(u32::from(samples))]),
-        Command::Rate { hz } => put_template(out, "rate %", &[Arg::int(u32::from(hz))]),
+        Command::SetPose { x_mm, y_mm, heading } => {
+            put_template(out, "pose %a %a %3", &[x_mm as u32, y_mm as u32, heading.to_millidegrees()], &[])
+        }
+        Command::Calibrate { samples } => put_template(out, "cal %0", &[u32::from(samples)], &[]),
+        Command::Rate { hz } => put_template(out, "rate %0", &[u32::from(hz)], &[]),
         Command::Status => push_str(out, "status"),
         Command::Help => push_str(out, "help"),
     }

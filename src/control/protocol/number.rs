@@ -140,48 +140,49 @@ pub fn push_text(out: &mut dyn TextOut, text: &str) -> Result<(), Overflow> {
     Ok(())
 }
 
-/// A value for a [`put_template`] slot.
-#[derive(Clone, Copy, PartialEq, Eq, Debug)]
-pub enum Arg<'a> {
-    /// `magnitude / 10^decimals` as [`push_fixed_parts`] writes it:
-    /// `(negative, magnitude, decimals)`.
-    Num(bool, u32, u32),
-    /// Text, as [`push_text`] writes it.
-    Text(&'a str),
-}
-
-impl Arg<'_> {
-    /// A signed scaled value (see [`push_fixed`]).
-    pub fn fixed(value: i32, decimals: u32) -> Self {
-        Arg::Num(value < 0, value.unsigned_abs(), decimals)
-    }
-    /// An unsigned integer.
-    pub fn int(value: u32) -> Self {
-        Arg::Num(false, value, 0)
-    }
-}
-
-/// The slot in a [`put_template`] template.
+/// The slot in a [`put_template`] template, followed by its code.
 pub const SLOT: u8 = b'%';
 
-/// Appends `template` with each [`SLOT`] (`%`) replaced by the next of
-/// `args` (a slot past the last argument writes nothing; the template's own
-/// text is written as [`TextOut::put_ascii`] writes it). One call per line
-/// shape instead of one call per label and one per value: each costs about
-/// 10 bytes of the robot's code at its call site, an argument about half.
+/// Appends `template` with each slot replaced by the next value of its
+/// kind. A slot is [`SLOT`] (`%`) and a code:
+/// - `0`..=`9`: the next of `nums` as an unsigned value with that many
+///   decimals (`%3` writes 1500 as `1.500`, see [`push_fixed_parts`]);
+/// - `a`..=`j`: the next of `nums` as an `i32`'s bits with 0..=9 decimals
+///   (`%c` writes -1234 as `-12.34`, see [`push_fixed`]);
+/// - `s`: the next of `texts`, as [`push_text`] writes it.
+///
+/// A slot past the last value of its kind, or with another code, writes
+/// nothing; the template's own text is written as [`TextOut::put_ascii`]
+/// writes it. The format lives in the template (flash data), so a call
+/// passes each number as one word: one call per line shape costs a few
+/// bytes of the robot's code per value.
 #[inline(never)]
-pub fn put_template(out: &mut dyn TextOut, template: &str, args: &[Arg]) -> Result<(), Overflow> {
-    let mut args = args.iter();
+pub fn put_template(out: &mut dyn TextOut, template: &str, nums: &[u32], texts: &[&str]) -> Result<(), Overflow> {
+    let (mut nums, mut texts) = (nums.iter(), texts.iter());
     let mut rest = template.as_bytes();
     while let Some(i) = rest.iter().position(|&b| b == SLOT) {
         let (text, tail) = rest.split_at(i); // i < rest.len()
         out.put_ascii(text)?;
-        match args.next() {
-            Some(&Arg::Num(negative, magnitude, decimals)) => push_fixed_parts(out, negative, magnitude, decimals)?,
-            Some(Arg::Text(t)) => push_text(out, t)?,
-            None => {}
+        let code = tail.get(1).copied().unwrap_or(0);
+        match code {
+            b'0'..=b'9' => {
+                if let Some(&v) = nums.next() {
+                    push_fixed_parts(out, false, v, u32::from(code.wrapping_sub(b'0')))?;
+                }
+            }
+            b'a'..=b'j' => {
+                if let Some(&v) = nums.next() {
+                    push_fixed(out, v as i32, u32::from(code.wrapping_sub(b'a')))?;
+                }
+            }
+            b's' => {
+                if let Some(t) = texts.next() {
+                    push_text(out, t)?;
+                }
+            }
+            _ => {}
         }
-        rest = tail.get(1..).unwrap_or(&[]);
+        rest = tail.get(2..).unwrap_or(&[]);
     }
     out.put_ascii(rest)
 }

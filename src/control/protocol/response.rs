@@ -3,7 +3,7 @@
 //! telemetry directly.
 
 use super::command::{format_command, q8_to_centi, Command, ParseError};
-use super::number::{push_str, push_text, put_template, Arg, TextOut};
+use super::number::{push_str, push_text, put_template, TextOut};
 use super::telemetry::{motion_word, FaultCounters};
 use super::Overflow;
 use crate::model::{Motion, Pose, ServoCmd, Trim};
@@ -92,39 +92,39 @@ pub fn format_status(s: &Status, out: &mut dyn TextOut) -> Result<(), Overflow> 
     // at most MODE_MAX bytes of the mode word (it may be any &str)
     let mode = s.mode.get(..s.mode.len().min(MODE_MAX)).unwrap_or("?");
     let motion = motion_word(s.motion.kind());
+    // signed values as their i32's bits (codes a..d)
     put_template(
         out,
-        "# status t_ms=% mode=% motion=% v_mps=% w_radps=%",
-        &[Arg::int(s.t_ms), Arg::Text(mode), Arg::Text(motion), Arg::fixed(v, 3), Arg::fixed(w, 3)],
+        "# status t_ms=%0 mode=%s motion=%s v_mps=%d w_radps=%d",
+        &[s.t_ms, v as u32, w as u32],
+        &[mode, motion],
     )?;
     if let Some(ms) = s.remaining_ms {
-        put_template(out, " left_ms=%", &[Arg::int(ms)])?;
+        put_template(out, " left_ms=%0", &[ms], &[])?;
     }
-    let up = |ok: bool| Arg::Text(if ok { "ok" } else { "down" });
+    let up = |ok: bool| if ok { "ok" } else { "down" };
     let f = &s.faults;
     put_template(
         out,
-        " x_mm=% y_mm=% heading_deg=% left_cmd=% right_cmd=% trim_left=% trim_right=% rate_hz=% \
-front=% right=% compass=% faults=%/%/%/%/%/%",
+        " x_mm=%a y_mm=%a heading_deg=%3 left_cmd=%2 right_cmd=%2 trim_left=%c trim_right=%c rate_hz=%0 \
+front=%s right=%s compass=%s faults=%0/%0/%0/%0/%0/%0",
         &[
-            Arg::fixed(s.pose.x.to_length().to_mm(), 0),
-            Arg::fixed(s.pose.y.to_length().to_mm(), 0),
-            Arg::Num(false, s.pose.theta.to_millidegrees(), 3),
-            Arg::Num(false, s.left_cmd.to_centi(), 2),
-            Arg::Num(false, s.right_cmd.to_centi(), 2),
-            Arg::fixed(q8_to_centi(i32::from(s.left_trim.0)), 2),
-            Arg::fixed(q8_to_centi(i32::from(s.right_trim.0)), 2),
-            Arg::int(u32::from(s.rate_hz)),
-            up(s.front_ok),
-            up(s.right_ok),
-            up(s.compass_ok),
-            Arg::int(f.bus),
-            Arg::int(f.timeout),
-            Arg::int(f.missing),
-            Arg::int(f.bad_sample),
-            Arg::int(f.rejected_outliers),
-            Arg::int(f.overruns),
+            s.pose.x.to_length().to_mm() as u32,
+            s.pose.y.to_length().to_mm() as u32,
+            s.pose.theta.to_millidegrees(),
+            s.left_cmd.to_centi(),
+            s.right_cmd.to_centi(),
+            q8_to_centi(i32::from(s.left_trim.0)) as u32,
+            q8_to_centi(i32::from(s.right_trim.0)) as u32,
+            u32::from(s.rate_hz),
+            f.bus,
+            f.timeout,
+            f.missing,
+            f.bad_sample,
+            f.rejected_outliers,
+            f.overruns,
         ],
+        &[up(s.front_ok), up(s.right_ok), up(s.compass_ok)],
     )
 }
 
