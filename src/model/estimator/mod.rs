@@ -113,17 +113,17 @@
 //! | predict Stop | 181 (169; 626) |
 //! | predict Straight | 663 (689; 1221) |
 //! | predict Turn | 741 (720; 1284) |
-//! | update_lidar (accepted, incl. its [`Beam`]) | 1570 (1362; 5368) |
-//! | update_heading (accepted) | 1021 (837; 4527) |
+//! | update_lidar (accepted, incl. its [`Beam`]) | 1613 (1362; 5368) |
+//! | update_heading (accepted) | 1062 (837; 4527) |
 //!
 //! Predict: [`advance`] on the pose in place (no `sin_cos` going straight,
 //! one turning, both from the pose's cache), the Jacobian and noise from
 //! the cached sin/cos of the old and new heading, about 17 [`mul_hi`] (~11
 //! instructions each, the Q30 products unsaturated where `|f| < 1/2` bounds
 //! them); no 64-bit multiply, no division. A correction: about 20 `mul_hi`,
-//! 5 [`mul_wide`] (~25 instructions each), no runtime helper call; a lidar
-//! adds its [`Beam`] (the cached sin/cos turned by the mount's quarter
-//! turn, 6 `mul_hi` with the corner test). Every step ends with the
+//! 5 calls of [`mul_wide`] (~23 instructions each, out of line), no
+//! runtime helper call; a lidar adds its [`Beam`] (the cached sin/cos
+//! turned by the mount's quarter turn, 6 `mul_hi` with the corner test). Every step ends with the
 //! conditioning (~80 instructions; an exact `P_ij^2 <= P_ii P_jj` test from
 //! 15-bit partial products only when `|P_ij| > min(P_ii, P_jj)`).
 
