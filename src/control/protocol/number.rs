@@ -298,9 +298,10 @@ impl Cursor {
         }
     }
 
-    /// `magnitude / 10^decimals` as in [`push_fixed_parts`]: the length is counted first, then the text is
-    /// written from its last byte, four digits per reciprocal multiply by
-    /// 10^4 and one per multiply by the reciprocal of 10 (no division).
+    /// `magnitude / 10^decimals` as in [`push_fixed_parts`]: the length is
+    /// counted first, then the text is written from its last byte, four
+    /// digits per reciprocal multiply by 10^4 and one per multiply by the
+    /// reciprocal of 10 (no division).
     #[inline(never)]
     pub(super) fn number(&mut self, negative: bool, magnitude: u32, decimals: u32) {
         let decimals = decimals.min(9) as usize;

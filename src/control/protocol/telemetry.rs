@@ -237,8 +237,9 @@ impl Cells {
         let mut row = Cursor::new();
         for i in 0..COLUMNS {
             let (Some(&v), Some(&format)) = (self.v.get(i), FORMAT.get(i)) else { break };
-            // the widest column is 13 bytes with its comma (a u32 with 3
-            // decimals, or an i32 with 1): a piece goes out when fewer are left
+            // the widest column is 13 bytes with its comma (a negative i32
+            // with decimals, e.g. -214748364.8): a piece goes out when fewer
+            // are left
             if row.room() < 13 {
                 row.flush(out)?;
                 row.clear();
