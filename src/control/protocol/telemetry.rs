@@ -162,6 +162,9 @@ const FORMAT: [u8; COLUMNS] = [
 const FRONT: u32 = 9;
 const RIGHT: u32 = 11;
 const COMPASS: u32 = 13;
+/// The first fault counter's column (`f_bus`; the others follow in
+/// [`FaultCounters`]' order).
+const FAULTS: u32 = 20;
 
 impl Cells {
     /// The cells of `t` (the firmware's path: no [`TelemetryRow`] between).
@@ -342,12 +345,12 @@ impl TelemetryRow {
             mag_field: group(COMPASS + 3),
             compass_mdeg: opt(COMPASS + 6).map(|d| d as u32),
             faults: FaultCounters {
-                bus: at(20),
-                timeout: at(21),
-                missing: at(22),
-                bad_sample: at(23),
-                rejected_outliers: at(24),
-                overruns: at(25),
+                bus: at(FAULTS),
+                timeout: at(FAULTS + 1),
+                missing: at(FAULTS + 2),
+                bad_sample: at(FAULTS + 3),
+                rejected_outliers: at(FAULTS + 4),
+                overruns: at(FAULTS + 5),
             },
         }
     }
