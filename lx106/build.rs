@@ -112,7 +112,7 @@ fn main() {
         );
     }
     let manifest = PathBuf::from(env::var("CARGO_MANIFEST_DIR").unwrap());
-    for f in ["link.x", "asm/start.S", "csrc/step_c.c", "build.rs", "fetch-libgcc-src.sh"] {
+    for f in ["link.x", "../rom-functions.x", "asm/start.S", "csrc/step_c.c", "build.rs", "fetch-libgcc-src.sh"] {
         println!("cargo:rerun-if-changed={f}");
     }
     for v in ["XT_CC", "XT_LIBGCC_CACHE", "XDG_CACHE_HOME", "HOME"] {
@@ -194,6 +194,14 @@ fn main() {
     println!("cargo:rustc-link-search=native={}", manifest.display());
     println!("cargo:rustc-link-arg=-nostartfiles");
     println!("cargo:rustc-link-arg=-Tlink.x");
+    // The size probes (linked, never run) take memcpy, memset and __muldi3
+    // from the ESP8266's ROM as the robot's link does (../rom-functions.x,
+    // INCLUDEd by the firmware's memory.x), so their figures count what the
+    // robot's flash holds. The binaries QEMU runs have no ROM: they keep
+    // compiler_builtins' versions.
+    for bin in ["core-probe", "size-probe", "size-base"] {
+        println!("cargo:rustc-link-arg-bin={bin}=-Wl,-T../rom-functions.x");
+    }
     // whatever is still undefined: picolibc libc, then libgcc.  NOTE Debian's
     // lx106 libgcc lacks the soft-float/int helpers that live in the
     // ESP8266 mask ROM (__addsf3, __mulsf3, __muldi3, __udivsi3, ...); for

@@ -13,6 +13,9 @@
 #   plus the drivers, the bit-banged I2C master, the shared bus, the sensor
 #   crates and the servo pulse scheduler (everything but esp8266-hal's glue);
 # - size-base (src/bin/size_base.rs): the runtime alone.
+# All three link memcpy, memset and __muldi3 at their ESP8266 ROM addresses
+# (../rom-functions.x, as the firmware's memory.x does), so those are not in
+# their .text; the binaries QEMU runs carry compiler_builtins' versions.
 # Each figure is a probe minus size-base. Needs python3 for the breakdown
 # (tools/size_by_file.py: instruction bytes by owning module and function).
 set -euo pipefail
@@ -49,7 +52,10 @@ row "firmware stack: the core + drivers, bus, I2C, servo pulses (size-probe)" si
 
 echo "   runtime helpers the core links (compiler_builtins):"
 xtensa-lx106-elf-nm -S "$OUT/core-probe" |
-  awk '$3 ~ /^[tTwW]$/ && $4 ~ /^__/ { printf "     %-12s 0x%s bytes\n", $4, $2 }' | sort -u
+  awk '$3 ~ /^[tTwW]$/ && $4 ~ /^__/ { printf "     %-12s 0x%s bytes\n", $4, $2; n++ } END { if (!n) print "     none" }' | sort -u
+# ../rom-functions.x: what the robot calls in the ESP8266's ROM (not in .text)
+echo "   ESP8266 ROM routines, linked at their addresses (../rom-functions.x; not in .text):"
+xtensa-lx106-elf-nm "$OUT/core-probe" | awk '$2 == "A" && $3 !~ /^_/ || $2 == "A" && $3 ~ /^__[a-z]/ { printf "     %-12s at 0x%s\n", $3, $1 }' | sort -u
 # Informational: core::panicking entry points linked from the stack's paths
 np=$(xtensa-lx106-elf-objdump -d "$OUT/size-probe" | grep -cE 'l32r.*<[^>]*core9panicking' || true)
 echo "   references to core::panicking from the firmware stack: $np"
