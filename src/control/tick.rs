@@ -287,7 +287,7 @@ where
     /// [`Controller::new`] in another arena (the simulator's).
     pub fn new_in(front: F, right: R, compass: C, servos: S, pose: Pose, arena: Arena) -> Self {
         let model = config::actuators::MODEL;
-        let mut c = Controller {
+        Controller {
             front,
             right,
             compass,
@@ -303,10 +303,12 @@ where
             applied: model.stop(),
             estimator: Estimator::with_arena(pose, arena),
             dead: pose,
-            telemetry_hz: 0,
-            telemetry_period_us: 0,
+            // the config's rate, as `set_rate` would set it: the first row
+            // (after the header) at the first tick
+            telemetry_hz: INITIAL_HZ,
+            telemetry_period_us: INITIAL_PERIOD_US,
             next_telemetry_us: 0,
-            header_due: false,
+            header_due: INITIAL_HZ != 0,
             fresh_front: false,
             fresh_right: false,
             fresh_compass: false,
@@ -325,10 +327,7 @@ where
             calibrator: None,
             calibration_done: false,
             reinit_ran: false,
-        };
-        // config::timing::TELEMETRY_HZ is asserted below to fit the protocol's range
-        c.set_rate(config::timing::TELEMETRY_HZ as u16);
-        c
+        }
     }
 
     // ---- inputs ------------------------------------------------------
@@ -905,6 +904,14 @@ where
 }
 
 const _: () = assert!(config::timing::TELEMETRY_HZ <= config::serial::MAX_TELEMETRY_HZ as u32);
+/// The telemetry rate a new loop starts at (`config::timing::TELEMETRY_HZ`,
+/// asserted above to fit the protocol's range) and its period, us (0 = off,
+/// as [`Controller::set_rate`] gives).
+const INITIAL_HZ: u16 = config::timing::TELEMETRY_HZ as u16;
+const INITIAL_PERIOD_US: u32 = match config::timing::TELEMETRY_HZ {
+    0 => 0,
+    hz => 1_000_000 / hz,
+};
 
 /// `(us / 1000) as u32` (mod 2^32) without a 64-bit division (a ~430
 /// instruction call on the lx106): with `us = hi 2^32 + lo`, `lo = 1000 q +
