@@ -1,6 +1,6 @@
-//! Property tests for the robot's division-free paths: `div_rem_u64`,
-//! `div_i64` and `div_round` (the shift-and-subtract division every cold
-//! path uses instead of compiler_builtins' helpers) against the host's
+//! Property tests for the robot's divisions: `div_rem_u64`, `div_i64` and
+//! `div_round` (every cold path's division; on the robot calls of the
+//! ESP8266 ROM's helpers, see `rom-functions.x`) against the host's
 //! native `/` and `%` (i128 for the exact rounding), and the conversions
 //! rewritten on top of them against their former native formulas.
 

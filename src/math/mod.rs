@@ -109,45 +109,28 @@ pub const fn sat_i32(x: i64) -> i32 {
     }
 }
 
-/// `(n / d, n % d)` for `u64`, `None` when `d == 0`: shift-and-subtract
-/// long division, `d` first shifted up to the numerator, so a quotient of
-/// `k` bits takes `2k + 1` short steps.
+/// `(n / d, n % d)` for `u64`, `None` when `d == 0`.
 ///
-/// The lx106 has no divide instruction. compiler_builtins' 64-bit division
-/// costs about 1.2 KB of flash (and its 32-bit one 0.4 KB) for a handful of
-/// cold call sites (commands, `status`, telemetry's clock and turn rate,
-/// the calibration's result), where this is one small loop. Nothing on the
-/// state update's or the estimator's path divides. Every division in the
-/// robot's code goes through here ([`div_i64`], [`div_round`]), so no
-/// division helper is linked.
+/// The lx106 has no divide instruction: on the robot the quotient is a
+/// call of the ESP8266 ROM's `__udivdi3` (libgcc's, linked at its ROM
+/// address by `rom-functions.x`; Espressif's lx106 libgcc leaves the ROM's
+/// helpers out for that reason) and the remainder `n - q d` one of its
+/// `__muldi3`, so no division code is in flash. The call sites are cold
+/// (commands, `status`, telemetry's turn rate, the calibration's result):
+/// nothing on the state update's or the estimator's path divides. Every
+/// division in the robot's code is here, in [`div_i64`] (the ROM's
+/// `__divdi3`) or in [`div_round`] (on the magnitudes: the ROM has no
+/// `__moddi3`).
 #[inline(never)]
 pub fn div_rem_u64(n: u64, d: u64) -> Option<(u64, u64)> {
-    if d == 0 {
-        return None;
-    }
-    let (mut r, mut dd, mut bit) = (n, d, 1u64);
-    // the largest d 2^k <= n (dd <= r / 2, so the shift cannot overflow)
-    while dd <= r >> 1 {
-        dd <<= 1;
-        bit <<= 1;
-    }
-    let mut q = 0;
-    while bit != 0 {
-        if r >= dd {
-            r -= dd; // r >= dd
-            q |= bit;
-        }
-        dd >>= 1;
-        bit >>= 1;
-    }
-    Some((q, r))
+    Some((n.checked_div(d)?, n.checked_rem(d)?))
 }
 
 /// `n / d` truncated toward zero, as [`i64::checked_div`]: `None` when
-/// `d == 0` or for `i64::MIN / -1` (see [`div_rem_u64`]).
+/// `d == 0` or for `i64::MIN / -1` (on the robot a call of the ROM's
+/// `__divdi3`, see [`div_rem_u64`]).
 pub fn div_i64(n: i64, d: i64) -> Option<i64> {
-    let (q, _) = div_rem_u64(n.unsigned_abs(), d.unsigned_abs())?;
-    with_sign(q, (n < 0) != (d < 0))
+    n.checked_div(d)
 }
 
 /// `n / d` rounded to nearest (halves away from zero); `None` when `d == 0`
@@ -159,13 +142,8 @@ pub fn div_round(n: i64, d: i64) -> Option<i64> {
     // the remainder is at least half of |d|: round away from zero (r < |d|,
     // so neither side wraps; q < 2^63 whenever r > 0)
     let q = q.wrapping_add(u64::from(r >= d_abs.wrapping_sub(r)));
-    with_sign(q, (n < 0) != (d < 0))
-}
-
-/// A quotient's magnitude with its sign, if it fits an `i64`.
-fn with_sign(q: u64, negative: bool) -> Option<i64> {
-    if negative {
-        // q <= 2^63: -2^63 is i64::MIN
+    // the magnitude with its sign, if it fits an i64 (-2^63 is i64::MIN)
+    if (n < 0) != (d < 0) {
         (q <= 1 << 63).then(|| (q as i64).wrapping_neg())
     } else {
         i64::try_from(q).ok()
