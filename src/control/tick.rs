@@ -51,7 +51,7 @@ use crate::control::protocol::{
 };
 use crate::driver::calibration::{CalStatus, CalibrationError, MagCalibrator};
 use crate::driver::{CompassSample, HeadingSensor, LidarSample, MagCalibrate, SensorError, Servos};
-use crate::math::{div_rem_u64, Angle, Coord, Dt, Length, TurnRate};
+use crate::math::{div_u64, Angle, Coord, Dt, Length, TurnRate};
 use crate::model::compass::MagCalibration;
 use crate::model::estimator::{Estimator, Update};
 use crate::model::measurement::{Arena, LidarId};
@@ -444,7 +444,7 @@ where
         self.telemetry_hz = hz;
         // hz = 0 (off) gives period 0
         // <= 1_000_000: fits
-        self.telemetry_period_us = div_rem_u64(1_000_000, u64::from(hz)).map_or(0, |(q, _)| q as u32);
+        self.telemetry_period_us = div_u64(1_000_000, u64::from(hz)).map_or(0, |q| q as u32);
         // the first row at the next tick (after the header if telemetry was off)
         self.next_telemetry_us = self.clock_us as Stamp;
         if hz != 0 && was_off {
@@ -925,7 +925,7 @@ fn whole_ms(us: u64) -> u32 {
         return q; // the first 71 minutes
     }
     if hi > HI_MAX {
-        return div_rem_u64(us, 1_000).map_or(0, |(q, _)| q as u32); // after 1,900 years
+        return div_u64(us, 1_000).map_or(0, |q| q as u32); // after 1,900 years
     }
     let (q2, _) = div_rem_1000(hi.wrapping_mul(296).wrapping_add(r)); // no wrap: hi <= HI_MAX
     hi.wrapping_mul(4_294_967).wrapping_add(q).wrapping_add(q2) // mod 2^32, as the cast

@@ -109,39 +109,38 @@ pub const fn sat_i32(x: i64) -> i32 {
     }
 }
 
-/// `(n / d, n % d)` for `u64`, `None` when `d == 0`.
+/// `n / d` for `u64`, `None` when `d == 0`.
 ///
-/// The lx106 has no divide instruction: on the robot the quotient is a
-/// call of the ESP8266 ROM's `__udivdi3` (libgcc's, linked at its ROM
-/// address by `rom-functions.x`; Espressif's lx106 libgcc leaves the ROM's
-/// helpers out for that reason) and the remainder `n - q d` one of its
-/// `__muldi3`, so no division code is in flash. The call sites are cold
-/// (commands, `status`, telemetry's turn rate, the calibration's result):
-/// nothing on the state update's or the estimator's path divides. Every
-/// division in the robot's code is here, in [`div_i64`] (the ROM's
-/// `__divdi3`) or in [`div_round`] (on the magnitudes: the ROM has no
-/// `__moddi3`).
+/// The lx106 has no divide instruction: on the robot this is a call of the
+/// ESP8266 ROM's `__udivdi3` (libgcc's, linked at its ROM address by
+/// `rom-functions.x`; Espressif's lx106 libgcc leaves the ROM's helpers out
+/// for that reason), so no division code is in flash. The call sites are
+/// cold (commands, `status`, telemetry's turn rate, the calibration's
+/// result): nothing on the state update's or the estimator's path divides.
+/// Every division in the robot's code is here, in [`div_i64`] (the ROM's
+/// `__divdi3`) or in [`div_round`] (one division of magnitudes).
 #[inline(never)]
-pub fn div_rem_u64(n: u64, d: u64) -> Option<(u64, u64)> {
-    Some((n.checked_div(d)?, n.checked_rem(d)?))
+pub fn div_u64(n: u64, d: u64) -> Option<u64> {
+    n.checked_div(d)
 }
 
 /// `n / d` truncated toward zero, as [`i64::checked_div`]: `None` when
 /// `d == 0` or for `i64::MIN / -1` (on the robot a call of the ROM's
-/// `__divdi3`, see [`div_rem_u64`]).
+/// `__divdi3`, see [`div_u64`]).
 pub fn div_i64(n: i64, d: i64) -> Option<i64> {
     n.checked_div(d)
 }
 
 /// `n / d` rounded to nearest (halves away from zero); `None` when `d == 0`
 /// or the quotient does not fit (`i64::MIN / -1`). Off the per-step path
-/// only (see [`div_rem_u64`]).
+/// only (see [`div_u64`]).
 pub fn div_round(n: i64, d: i64) -> Option<i64> {
+    // on the magnitudes, `(|n| + floor(|d| / 2)) / |d|` rounds half up:
+    // for an even |d| that is the half; for an odd one the remainder
+    // reaches ceil(|d| / 2) exactly when it is more than half. No wrap:
+    // |n| <= 2^63 and |d| / 2 <= 2^62.
     let d_abs = d.unsigned_abs();
-    let (q, r) = div_rem_u64(n.unsigned_abs(), d_abs)?;
-    // the remainder is at least half of |d|: round away from zero (r < |d|,
-    // so neither side wraps; q < 2^63 whenever r > 0)
-    let q = q.wrapping_add(u64::from(r >= d_abs.wrapping_sub(r)));
+    let q = div_u64(n.unsigned_abs() + (d_abs >> 1), d_abs)?;
     // the magnitude with its sign, if it fits an i64 (-2^63 is i64::MIN)
     if (n < 0) != (d < 0) {
         (q <= 1 << 63).then(|| (q as i64).wrapping_neg())
