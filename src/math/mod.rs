@@ -330,7 +330,7 @@ impl Speed {
         f64::from(self.0) / Self::PER_MM_S / 1000.0
     }
     pub fn abs(self) -> Speed {
-        Speed(self.0.saturating_abs())
+        Speed(self.0.wrapping_abs()) // |bits| <= MAX: no wrap
     }
     #[allow(clippy::should_implement_trait)] // also implemented: `-speed`
     pub fn neg(self) -> Speed {
@@ -410,7 +410,7 @@ impl TurnRate {
         f64::from(self.0) / Self::PER_RAD_S
     }
     pub fn abs(self) -> TurnRate {
-        TurnRate(self.0.saturating_abs())
+        TurnRate(self.0.wrapping_abs()) // |bits| <= MAX: no wrap
     }
     #[allow(clippy::should_implement_trait)] // also implemented: `-rate`
     pub fn neg(self) -> TurnRate {

@@ -191,7 +191,7 @@ impl Beam {
         let (x_wall, ax) = if cos >= 0 { (Wall::North, arena.length_x.saturating_sub(ox)) } else { (Wall::South, ox) };
         let (y_wall, ay) = if sin >= 0 { (Wall::East, arena.width_y.saturating_sub(oy)) } else { (Wall::West, oy) };
         // |sin|, |cos| <= 2^30: the absolute values cannot overflow.
-        let (abs_s, abs_c) = (sin.saturating_abs(), cos.saturating_abs());
+        let (abs_s, abs_c) = (sin.wrapping_abs(), cos.wrapping_abs());
         // x-wall first when A_x / |c| <= A_y / |s|, i.e. A_x |s| <= A_y |c|
         // (a negative A, an origin outside the box, counts as 0).
         let tx = mul_hi(ax.0.max(0), abs_s);
