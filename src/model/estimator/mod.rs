@@ -111,10 +111,10 @@
 //! | call | instructions |
 //! | --- | ---: |
 //! | predict Stop | 181 (169; 626) |
-//! | predict Straight | 663 (689; 1221) |
-//! | predict Turn | 741 (720; 1284) |
-//! | update_lidar (accepted, incl. its [`Beam`]) | 1613 (1362; 5368) |
-//! | update_heading (accepted) | 1062 (837; 4527) |
+//! | predict Straight | 658 (689; 1221) |
+//! | predict Turn | 738 (720; 1284) |
+//! | update_lidar (accepted, incl. its [`Beam`]) | 1572 (1362; 5368) |
+//! | update_heading (accepted) | 1037 (837; 4527) |
 //!
 //! Predict: [`advance`] on the pose in place (no `sin_cos` going straight,
 //! one turning, both from the pose's cache), the Jacobian and noise from
