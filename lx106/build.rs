@@ -194,8 +194,9 @@ fn main() {
     println!("cargo:rustc-link-search=native={}", manifest.display());
     println!("cargo:rustc-link-arg=-nostartfiles");
     println!("cargo:rustc-link-arg=-Tlink.x");
-    // The size probes (linked, never run) take memcpy, memset and __muldi3
-    // from the ESP8266's ROM as the robot's link does (../rom-functions.x,
+    // The size probes (linked, never run) take memcpy, memset, __muldi3 and
+    // the 64-bit division helpers from the ESP8266's ROM as the robot's link
+    // does (../rom-functions.x,
     // INCLUDEd by the firmware's memory.x), so their figures count what the
     // robot's flash holds. The binaries QEMU runs have no ROM: they keep
     // compiler_builtins' versions.

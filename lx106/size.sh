@@ -13,9 +13,10 @@
 #   plus the drivers, the bit-banged I2C master, the shared bus, the sensor
 #   crates and the servo pulse scheduler (everything but esp8266-hal's glue);
 # - size-base (src/bin/size_base.rs): the runtime alone.
-# All three link memcpy, memset and __muldi3 at their ESP8266 ROM addresses
-# (../rom-functions.x, as the firmware's memory.x does), so those are not in
-# their .text; the binaries QEMU runs carry compiler_builtins' versions.
+# All three link memcpy, memset, __muldi3 and the 64-bit division helpers at
+# their ESP8266 ROM addresses (../rom-functions.x, as the firmware's memory.x
+# does), so those are not in their .text; the binaries QEMU runs carry
+# compiler_builtins' versions.
 # Each figure is a probe minus size-base. Needs python3 for the breakdown
 # (tools/size_by_file.py: instruction bytes by owning module and function).
 set -euo pipefail

@@ -337,7 +337,8 @@ impl Speed {
         Speed(-self.0) // |bits| <= MAX, so negation cannot overflow
     }
 
-    /// Distance covered in `dt`, in units of 2^-24 mm (|result| < 2^29).
+    /// Distance covered in `dt`, in units of 2^-24 mm (|result| < 2^31: at
+    /// most 65.5 mm, `MAX` over `Dt::MAX`).
     /// Two 16x16 products: `v = vh * 2^16 + vl`, `v dt / 2^8 = vh dt 2^8 + vl dt / 2^8`.
     #[inline(always)]
     pub fn distance_q24(self, dt: Dt) -> i32 {

@@ -458,7 +458,7 @@ impl Estimator {
                 // Q: distance noise along (c, s), heading drift. |d| < 2^31,
                 // K_DIST < 2^21: var_d < 2^20, so every Q30 product below is
                 // far inside i32.
-                let ad = d.wrapping_abs(); // |d| < 2^29 (distance_q24): no wrap
+                let ad = d.wrapping_abs(); // |d| < 2^31 (above): no wrap
                 add_noise(p, mul_hi(ad, K_DIST), c, s);
                 p.tt = p.tt.saturating_add(mul_hi(ad, K_DRIFT));
             }
