@@ -444,7 +444,7 @@ where
         self.telemetry_hz = hz;
         // hz = 0 (off) gives period 0
         // <= 1_000_000: fits
-        self.telemetry_period_us = div_u64(1_000_000, u64::from(hz)).map_or(0, |q| q as u32);
+        self.telemetry_period_us = telemetry_period_us(hz);
         // the first row at the next tick (after the header if telemetry was off)
         self.next_telemetry_us = self.clock_us as Stamp;
         if hz != 0 && was_off {
@@ -908,10 +908,17 @@ const _: () = assert!(config::timing::TELEMETRY_HZ <= config::serial::MAX_TELEME
 /// asserted above to fit the protocol's range) and its period, us (0 = off,
 /// as [`Controller::set_rate`] gives).
 const INITIAL_HZ: u16 = config::timing::TELEMETRY_HZ as u16;
-const INITIAL_PERIOD_US: u32 = match config::timing::TELEMETRY_HZ {
-    0 => 0,
-    hz => 1_000_000 / hz,
-};
+const INITIAL_PERIOD_US: u32 = telemetry_period_us(INITIAL_HZ);
+
+/// The period of a telemetry rate, us: 0 for 0 Hz (off), else at most 1 s
+/// (fits). [`div_u64`] stays a call: a division the compiler sees as 32-bit
+/// would link compiler_builtins' `__udivsi3`, which the ROM file leaves out.
+const fn telemetry_period_us(hz: u16) -> u32 {
+    match div_u64(1_000_000, hz as u64) {
+        Some(q) => q as u32,
+        None => 0,
+    }
+}
 
 /// `(us / 1000) as u32` (mod 2^32) without a 64-bit division (a ~430
 /// instruction call on the lx106): with `us = hi 2^32 + lo`, `lo = 1000 q +

@@ -120,7 +120,7 @@ pub const fn sat_i32(x: i64) -> i32 {
 /// Every division in the robot's code is here, in [`div_i64`] (the ROM's
 /// `__divdi3`) or in [`div_round`] (one division of magnitudes).
 #[inline(never)]
-pub fn div_u64(n: u64, d: u64) -> Option<u64> {
+pub const fn div_u64(n: u64, d: u64) -> Option<u64> {
     n.checked_div(d)
 }
 
