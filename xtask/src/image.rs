@@ -1,5 +1,208 @@
-//! `cargo fw-image`: the firmware for the ESP8266, linked and checked.
+//! `cargo fw-image`: the firmware for the ESP8266 built with upstream
+//! nightly, linked, checked, and written as the images esptool flashes.
+//!
+//! 1. `cargo fetch`, then the registry crates with assembly rewritten
+//!    ([`crate::patch`]) under `target/image/crates/`;
+//! 2. `xtensa/asm/*.S` assembled with GNU as;
+//! 3. `cargo +nightly build` of `src/bin/firmware.rs` for
+//!    `xtensa/xtensa-esp8266-none-elf.json` with the rewritten crates
+//!    patched in, linked through `xtensa/xt-link.sh` (GNU as, the literal
+//!    fix) with our `memory.x`, `exception.x` and `rom-functions.x`;
+//! 4. the checks of [`crate::elf`] (undefined symbols, vectors, interrupt
+//!    code in IRAM, budgets), each failing the build;
+//! 5. esptool's `elf2image` and `image-info` ([`crate::esptool`]).
+use std::fs;
+use std::path::{Path, PathBuf};
+use std::process::Command;
 
-pub fn main(_args: &[String]) -> Result<(), String> {
-    Err("fw-image: not built yet".into())
+use crate::{elf, esptool, patch};
+
+const USAGE: &str = "\
+usage: cargo fw-image [--clippy]
+
+Builds src/bin/firmware.rs for the ESP8266 with upstream nightly and writes
+  target/image/paperbot.elf          the linked firmware
+  target/image/paperbot-0x00000.bin  the boot image (flash offset 0x00000)
+  target/image/paperbot-0x10000.bin  the flash-mapped code (offset 0x10000)
+then checks the ELF and prints the memory budget.
+
+  --clippy   first run clippy (the panic lints) on the board code and the
+             firmware, for the same target, warnings as errors
+
+Needs: rustup nightly with rust-src; Debian packages gcc-xtensa-lx106
+binutils-xtensa-lx106; python3 with venv (esptool comes from PyPI).";
+
+/// The tools the build calls, by name (PATH).
+pub const XT_GCC: &str = "xtensa-lx106-elf-gcc";
+pub const XT_OBJDUMP: &str = "xtensa-lx106-elf-objdump";
+
+pub fn main(args: &[String]) -> Result<(), String> {
+    let mut clippy = false;
+    for arg in args {
+        match arg.as_str() {
+            "--clippy" => clippy = true,
+            "--help" | "-h" => {
+                println!("{USAGE}");
+                return Ok(());
+            }
+            other => return Err(format!("unknown option '{other}'\n{USAGE}")),
+        }
+    }
+    let root = repo_root();
+    let work = root.join("target/image");
+    check_tools()?;
+    fs::create_dir_all(&work).map_err(|e| format!("{}: {e}", work.display()))?;
+
+    println!("== registry crates with assembly, rewritten (target/image/crates/)");
+    run(Command::new("cargo").args(["fetch", "--quiet"]).current_dir(&root))?;
+    let patched = patch::prepare(&root.join("Cargo.lock"), &work)?;
+
+    println!("== our assembly (xtensa/asm/)");
+    let objects = assemble(&root, &work)?;
+
+    if clippy {
+        println!("== clippy on the firmware and the board code (the panic lints)");
+        run_cargo(nightly_cargo(&root, &work, &patched, &objects, "clippy").args(["--", "-D", "warnings"]))?;
+    }
+
+    println!("== cargo +nightly build (firmware profile, xtensa-esp8266-none-elf)");
+    run_cargo(&mut nightly_cargo(&root, &work, &patched, &objects, "build"))?;
+    let built = work.join("build/xtensa-esp8266-none-elf/firmware/firmware");
+    let elf_path = work.join("paperbot.elf");
+    fs::copy(&built, &elf_path).map_err(|e| format!("{}: {e}", built.display()))?;
+
+    println!("== checks ({})", rel(&root, &elf_path));
+    let report = elf::check(&elf_path)?;
+    print!("{report}");
+
+    println!("== esptool");
+    esptool::write_images(&root, &elf_path, &work.join("paperbot-"))?;
+    println!("\nflash with:\n  esptool --chip esp8266 write_flash 0x00000 target/image/paperbot-0x00000.bin 0x10000 target/image/paperbot-0x10000.bin");
+    Ok(())
+}
+
+/// The repository (xtask/ is one level below it).
+pub fn repo_root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).parent().map(Path::to_path_buf).unwrap_or_default()
+}
+
+fn rel(root: &Path, path: &Path) -> String {
+    path.strip_prefix(root).unwrap_or(path).display().to_string()
+}
+
+fn check_tools() -> Result<(), String> {
+    for tool in [XT_GCC, XT_OBJDUMP] {
+        if Command::new(tool).arg("--version").output().is_err() {
+            return Err(format!("{tool} not found: apt-get install gcc-xtensa-lx106 binutils-xtensa-lx106"));
+        }
+    }
+    let sysroot = Command::new("rustc").args(["+nightly", "--print", "sysroot"]).output();
+    let has_src = sysroot.ok().filter(|o| o.status.success()).is_some_and(|o| {
+        Path::new(String::from_utf8_lossy(&o.stdout).trim()).join("lib/rustlib/src/rust/library/core").is_dir()
+    });
+    if !has_src {
+        return Err("nightly with rust-src needed: rustup component add rust-src --toolchain nightly".into());
+    }
+    Ok(())
+}
+
+/// Each `xtensa/asm/*.S` to an object in `work/asm/`.
+fn assemble(root: &Path, work: &Path) -> Result<Vec<PathBuf>, String> {
+    let src_dir = root.join("xtensa/asm");
+    let out_dir = work.join("asm");
+    fs::create_dir_all(&out_dir).map_err(|e| format!("{}: {e}", out_dir.display()))?;
+    let mut sources: Vec<PathBuf> = fs::read_dir(&src_dir)
+        .map_err(|e| format!("{}: {e}", src_dir.display()))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|e| e == "S"))
+        .collect();
+    sources.sort();
+    let mut objects = Vec::new();
+    for src in sources {
+        let obj = out_dir.join(src.file_stem().unwrap_or_default()).with_extension("o");
+        run(Command::new(XT_GCC).args(["-c", "-x", "assembler-with-cpp"]).arg(&src).arg("-o").arg(&obj))?;
+        println!("  {}", rel(root, &src));
+        objects.push(obj);
+    }
+    Ok(objects)
+}
+
+/// `cargo +nightly <verb>` of the firmware with everything the image needs
+/// passed on the command line, so that the repository's own files stay as
+/// the esp toolchain reads them.
+fn nightly_cargo(root: &Path, work: &Path, patched: &[patch::Patched], objects: &[PathBuf], verb: &str) -> Command {
+    // The lockfile: the repository's versions, plus the patched path crates.
+    let lock = work.join("Cargo.lock");
+    let _ = fs::copy(root.join("Cargo.lock"), &lock);
+    let target = root.join("xtensa/xtensa-esp8266-none-elf.json");
+    let link_args: Vec<String> = objects.iter().map(|o| format!("\"-C\", \"link-arg={}\"", o.display())).collect();
+
+    let mut cmd = Command::new("cargo");
+    cmd.current_dir(root); // GNU ld finds memory.x, exception.x, rom-functions.x here
+    for var in ["RUSTUP_TOOLCHAIN", "RUSTC", "RUSTDOC", "RUSTC_WRAPPER", "RUSTFLAGS", "CARGO_TARGET_DIR", "CARGO"] {
+        cmd.env_remove(var);
+    }
+    cmd.args(["+nightly", verb, "-Zbuild-std=core", "-Zjson-target-spec", "-Zprofile-rustflags"])
+        .args(["--profile", "firmware", "--features", "firmware", "--bin", "firmware"])
+        .arg("--target")
+        .arg(&target)
+        .arg("--target-dir")
+        .arg(work.join("build"));
+    let mut config = vec![format!("resolver.lockfile-path=\"{}\"", lock.display())];
+    if verb == "build" {
+        // xt-link.sh assembles the LLVM assembly of the (fat-LTO, one
+        // codegen unit) firmware and of compiler_builtins with GNU as.
+        config.push("profile.firmware.package.paperbot.rustflags=[\"--emit=asm,link\"]".into());
+        config.push("profile.firmware.package.compiler_builtins.rustflags=[\"--emit=asm,link\"]".into());
+        config.push(format!("target.xtensa-esp8266-none-elf.linker=\"{}\"", root.join("xtensa/xt-link.sh").display()));
+        config.push(format!("target.xtensa-esp8266-none-elf.rustflags=[{}]", link_args.join(", ")));
+    }
+    for p in patched {
+        config.push(format!("patch.crates-io.{}.path=\"{}\"", p.name, p.dir.display()));
+        // path crates are linted like ours; these are not ours
+        config.push(format!("profile.firmware.package.{}.rustflags=[\"--cap-lints\", \"allow\"]", p.name));
+    }
+    for c in config {
+        cmd.arg("--config").arg(c);
+    }
+    cmd
+}
+
+/// Runs cargo with its messages passed through, but for the warning that
+/// the patches are unused: -Zbuild-std resolves the standard library's own
+/// workspace with the same `[patch]` table, where those crates are not.
+fn run_cargo(cmd: &mut Command) -> Result<(), String> {
+    use std::io::BufRead as _;
+    let mut child = cmd.stderr(std::process::Stdio::piped()).spawn().map_err(|e| format!("cargo: {e}"))?;
+    let mut skipping = false;
+    if let Some(stderr) = child.stderr.take() {
+        for line in std::io::BufReader::new(stderr).lines().map_while(Result::ok) {
+            if line.starts_with("warning: patch `") && line.ends_with("was not used in the crate graph") {
+                skipping = true;
+                continue;
+            }
+            // the help text under those warnings is indented
+            if skipping && (line.starts_with("help:") || line.starts_with("      ")) {
+                continue;
+            }
+            skipping = false;
+            eprintln!("{line}");
+        }
+    }
+    let status = child.wait().map_err(|e| format!("cargo: {e}"))?;
+    if status.success() {
+        Ok(())
+    } else {
+        Err(format!("cargo {:?} failed ({status})", cmd.get_args().collect::<Vec<_>>()))
+    }
+}
+
+/// Runs a command, its output passed through; an error if it fails.
+pub fn run(cmd: &mut Command) -> Result<(), String> {
+    let status = cmd.status().map_err(|e| format!("{:?}: {e}", cmd.get_program()))?;
+    if status.success() {
+        Ok(())
+    } else {
+        Err(format!("{:?} {:?} failed ({status})", cmd.get_program(), cmd.get_args().collect::<Vec<_>>()))
+    }
 }

@@ -2,8 +2,12 @@
 //! and that image booted on the project's emulated board.
 use std::process::ExitCode;
 
+mod elf;
 mod emu;
+mod esptool;
 mod image;
+mod patch;
+mod rewrite;
 
 const USAGE: &str = "\
 usage: cargo fw-image [--help]

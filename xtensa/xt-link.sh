@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Linker wrapper for the xtensa-esp8266-none-elf custom target.
+# Linker wrapper for the xtensa-esp8266-none-elf custom target, shared by
+# the firmware image (`cargo fw-image`) and lx106/.
 #
 # WHY: rustc nightly 1.97 (LLVM 22.1) emits broken Xtensa *objects*: its
 # integrated assembler puts each function's L32R literal pool at the end of
@@ -20,30 +21,28 @@ GCC="${XT_CC:-xtensa-lx106-elf-gcc}"
 OBJCOPY="${XT_OBJCOPY:-xtensa-lx106-elf-objcopy}"
 AR="${XT_AR:-xtensa-lx106-elf-ar}"
 
-# GNU as (binutils 2.40, xtensa) rejects two things LLVM prints:
-#  - .cfi_* directives ("CFI is not supported for this target"): dropped
-#    (only the debuggers' .debug_frame is lost);
-#  - DWARF `.file N "dir" "name"` (two-string form): joined to "dir/name".
-# Several binaries of this package link in parallel and share the
+# Before GNU as (binutils 2.40, xtensa) sees LLVM's assembly:
+#  - .cfi_* directives go ("CFI is not supported for this target"; only the
+#    debuggers' .debug_frame is lost);
+#  - DWARF `.file N "dir" "name"` (two-string form) becomes "dir/name";
+#  - literal-fix.awk moves each literal pool after its function's
+#    `.section` line (LLVM prints it before).
+# Several binaries of one package link in parallel and share the
 # compiler_builtins object: every file is written under a unique temporary
-# name and renamed into place (atomic), so a concurrent link never reads a
+# name and renamed into place, so a concurrent link never reads a
 # half-written one.
 #
-# GNU as options: `--no-target-align`. By default GNU as aligns branch
-# targets to 4-byte fetch words: fill bytes after unconditional jumps (never
-# executed) and wide forms of narrow instructions before fall-through
-# targets, 568 B of the core at 1761c99. LLVM's own Xtensa assembler, which
-# the robot's toolchain (`cargo +esp`) uses, does no such alignment (its
-# density compression narrows the same instructions GNU as narrows). So the
-# lx106 figures count the code the robot's build holds, not GNU as's
-# alignment. Instruction counts are unchanged.
+# `--no-target-align`: GNU as would align branch targets to fetch words
+# (fill bytes after jumps, wide forms of narrow instructions); LLVM's own
+# Xtensa assembler, which the esp toolchain's build uses, does not. Without
+# it both builds hold the same code; instruction counts do not change.
 GAS_FLAGS=(-Wa,--no-target-align)
 assemble() { # $1 = LLVM .s, $2 = output .o
   if [[ -f "$2" && "$2" -nt "$1" ]]; then return 0; fi
   local tmp="$2.$$"
   sed -e '/^[[:space:]]*\.cfi_/d' \
       -e 's|^\([[:space:]]*\.file[[:space:]]\{1,\}[0-9]\{1,\}[[:space:]]\{1,\}\)"\([^"]*\)"[[:space:]]\{1,\}"\([^"]*\)"|\1"\2/\3"|' \
-      "$1" > "$tmp.s"
+      "$1" | awk -f "$(dirname "$0")/literal-fix.awk" > "$tmp.s"
   "$GCC" -c "${GAS_FLAGS[@]}" -x assembler "$tmp.s" -o "$tmp.o"
   # Embedded LLVM bitcode (.llvmbc/.llvmcmd, from embed-bitcode) makes
   # binutils' LLVM plugin claim the object, and ar/nm/ld then see no symbols.
