@@ -213,10 +213,10 @@ pub mod pins {
 pub mod i2c {
     /// Both VL53L0X boot at 0x29 (datasheet).
     pub const LIDAR_DEFAULT_ADDR: u8 = 0x29;
-    /// Front lidar after bring-up (the course sketch used 22).
-    pub const FRONT_LIDAR_ADDR: u8 = 22;
-    /// Right lidar after bring-up (the course sketch used 25).
-    pub const RIGHT_LIDAR_ADDR: u8 = 25;
+    /// Front lidar after bring-up (the course sketch's 22, decimal).
+    pub const FRONT_LIDAR_ADDR: u8 = 0x16;
+    /// Right lidar after bring-up (the course sketch's 25, decimal).
+    pub const RIGHT_LIDAR_ADDR: u8 = 0x19;
     /// MPU9250 (AD0 low).
     pub const MPU9250_ADDR: u8 = 0x68;
     /// AK8963 once the MPU9250 is in bypass mode.
