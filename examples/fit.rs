@@ -3,20 +3,36 @@
 //!
 //! ```text
 //! cargo run --example fit -- tests/data/lab1/servo_runs.csv
-//! cargo run --example fit -- tests/data/lab1/lidar_front.csv [--all-readings]
+//! cargo run --example fit -- tests/data/lab1/lidar_front.csv
 //! ```
 //! The format is recognised by the CSV header (see tests/data/lab1/README.md).
+//! Servo runs give the eight actuator lines (speed per command pair from the
+//! mean time, one line per wheel); a lidar file gives its line the report's
+//! way: reading on true distance over every reading, inverted
+//! (`paperbot::model::fit::fit_lidar` says why). A value that is not a finite
+//! number, a time that is not positive or a motion with fewer than two
+//! distinct commands is an error: nothing is printed and the exit code is 1.
 
 use paperbot::model::fit::config_constants;
 use std::process::ExitCode;
 
+const USAGE: &str =
+    "usage: fit <csv>\n  servo_runs.csv, lidar_front.csv or lidar_right.csv (tests/data/lab1/README.md)";
+
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let Some(path) = args.iter().find(|a| !a.starts_with("--")) else {
-        eprintln!("usage: fit <csv> [--all-readings]\n  servo_runs.csv, lidar_front.csv, lidar_right.csv");
+    if args.iter().any(|a| a == "-h" || a == "--help") {
+        println!("{USAGE}");
+        return ExitCode::SUCCESS;
+    }
+    let [path] = args.as_slice() else {
+        eprintln!("{USAGE}");
         return ExitCode::from(2);
     };
-    let all = args.iter().any(|a| a == "--all-readings");
+    if path.starts_with('-') {
+        eprintln!("fit: unknown option {path}\n{USAGE}");
+        return ExitCode::from(2);
+    }
     let text = match std::fs::read_to_string(path) {
         Ok(t) => t,
         Err(e) => {
@@ -24,7 +40,7 @@ fn main() -> ExitCode {
             return ExitCode::from(1);
         }
     };
-    match config_constants(&text, path, all) {
+    match config_constants(&text, path) {
         Ok(s) => {
             print!("{s}");
             ExitCode::SUCCESS

@@ -4,19 +4,21 @@
 //!
 //! ```text
 //! cargo run --example sim_pty -- [options]
-//!   --link PATH        also make PATH a symlink to the PTY (e.g. /tmp/paperbot)
+//!   --link PATH        also make PATH a symlink to the PTY (e.g. /tmp/paperbot; replaces only a symlink)
 //!   --seed N           noise seed (default 1)
 //!   --no-noise         exact run: no motion, lidar or compass noise
 //!   --start X,Y,DEG    true start pose (default from config::sim)
 //!   --duration S       stop after S seconds of wall time (default: run until killed)
 //! ```
 //! Then, in another terminal: `cargo run --example teleop -- /dev/pts/N`.
+//! Ctrl-C (or the end of `--duration`) stops the server and removes the link.
 
 use std::process::ExitCode;
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 use std::time::Duration;
 
+use paperbot::host::args;
 use paperbot::sim::body::PoseF64;
 use paperbot::sim::robot::{Noise, SimConfig, SimRobot};
 use paperbot::sim::serve::Server;
@@ -33,19 +35,15 @@ fn parse_args() -> Result<Args, String> {
     let mut it = std::env::args().skip(1);
     while let Some(flag) = it.next() {
         let mut value = |name: &str| it.next().ok_or(format!("{name} needs a value"));
-        let num = |s: &str, name: &str| s.trim().parse::<f64>().map_err(|_| format!("{name}: bad number {s:?}"));
         match flag.as_str() {
             "--link" => a.link = Some(value("--link")?),
             "--seed" => a.cfg.seed = value("--seed")?.parse().map_err(|_| "--seed wants an integer")?,
             "--no-noise" => a.cfg.noise = Noise::OFF,
             "--start" => {
-                let v = value("--start")?;
-                let p: Vec<&str> = v.split(',').collect();
-                let [x, y, deg] = p.as_slice() else { return Err("--start wants X,Y,DEG".into()) };
-                a.cfg.start = PoseF64::new(num(x, "--start")?, num(y, "--start")?, num(deg, "--start")?.to_radians());
+                let (x, y, deg) = args::start(&value("--start")?, a.cfg.arena.length_x, a.cfg.arena.width_y)?;
+                a.cfg.start = PoseF64::new(x, y, deg.to_radians());
             }
-            "--duration" => a.duration_s = Some(num(&value("--duration")?, "--duration")?),
-            "-h" | "--help" => return Err(String::new()),
+            "--duration" => a.duration_s = Some(args::number("--duration", &value("--duration")?)?),
             f => return Err(format!("unknown option {f}")),
         }
     }
@@ -64,13 +62,14 @@ fn usage() -> String {
 }
 
 fn main() -> ExitCode {
+    if std::env::args().skip(1).any(|a| a == "-h" || a == "--help") {
+        println!("{}", usage());
+        return ExitCode::SUCCESS;
+    }
     let args = match parse_args() {
         Ok(a) => a,
         Err(e) => {
-            if !e.is_empty() {
-                eprintln!("sim_pty: {e}");
-            }
-            eprintln!("{}", usage());
+            eprintln!("sim_pty: {e}\n{}", usage());
             return ExitCode::from(2);
         }
     };
@@ -88,7 +87,17 @@ fn main() -> ExitCode {
     }
     let path = slave.name().unwrap_or_default();
     if let Some(link) = &args.link {
-        let _ = std::fs::remove_file(link);
+        // an old link (from a run that was killed) is replaced; anything else is the user's
+        match std::fs::symlink_metadata(link) {
+            Ok(m) if m.file_type().is_symlink() => {
+                let _ = std::fs::remove_file(link);
+            }
+            Ok(_) => {
+                eprintln!("sim_pty: {link} exists and is not a symlink; not replacing it");
+                return ExitCode::FAILURE;
+            }
+            Err(_) => {}
+        }
         if let Err(e) = std::os::unix::fs::symlink(&path, link) {
             eprintln!("sim_pty: cannot link {link} -> {path}: {e}");
             return ExitCode::FAILURE;
@@ -101,6 +110,12 @@ fn main() -> ExitCode {
         args.link.as_deref().unwrap_or(&path)
     );
     let stop = Arc::new(AtomicBool::new(false));
+    // Ctrl-C and `kill` end the serving loop like --duration does, so the link is removed
+    for signal in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+        if let Err(e) = signal_hook::flag::register(signal, Arc::clone(&stop)) {
+            eprintln!("sim_pty: cannot catch signal {signal}: {e}");
+        }
+    }
     if let Some(s) = args.duration_s {
         let stop = Arc::clone(&stop);
         let d = Duration::from_secs_f64(s.clamp(0.0, 1e6));

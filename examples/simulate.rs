@@ -12,14 +12,24 @@
 //!   --no-noise         exact run: no motion, lidar or compass noise
 //!   --kinematics K     rigid (default) or report (the report's turn equations)
 //!   --out FILE         SVG output (default simulate.svg)
-//!   --quiet            do not print the robot's output
-//!   --print-script     print the built-in script and exit
+//!   --quiet            do not print the robot's serial output (the summary still goes to stderr)
+//!   --print-script     print the script (the built-in one unless --script) and exit
 //! ```
+//!
+//! The firmware's pose is that of the start of its latest tick, so it trails
+//! the body by one tick (10 ms: 1.3 mm at 0.13 m/s, 1.4 deg at 2.5 rad/s);
+//! an exact run (`--no-noise`) shows only that, and the error at the end
+//! depends on what the robot is doing at that moment. The rms over the run
+//! compares runs fairly.
+//!
+//! Exit code 1 when the robot refused a script command (answered `# err`),
+//! after the run and the summary; 2 for bad options or a bad script.
 
 use std::io::Write;
 use std::process::ExitCode;
 use std::time::Instant;
 
+use paperbot::host::args;
 use paperbot::sim::arena::Arena;
 use paperbot::sim::body::{Kinematics, PoseF64};
 use paperbot::sim::robot::{Noise, SimConfig, SimRobot};
@@ -35,7 +45,8 @@ struct Args {
     print_script: bool,
 }
 
-fn parse_args() -> Result<Args, String> {
+/// `Ok(None)` for `--help`.
+fn parse_args() -> Result<Option<Args>, String> {
     let mut a = Args {
         cfg: SimConfig::default(),
         script: None,
@@ -44,6 +55,7 @@ fn parse_args() -> Result<Args, String> {
         quiet: false,
         print_script: false,
     };
+    let mut start = None;
     let mut it = std::env::args().skip(1);
     while let Some(flag) = it.next() {
         let mut value = |name: &str| it.next().ok_or(format!("{name} needs a value"));
@@ -52,16 +64,10 @@ fn parse_args() -> Result<Args, String> {
             "--script" => a.script = Some(value("--script")?),
             "--duration" => a.duration_s = num(&value("--duration")?, "--duration")?,
             "--arena" => {
-                let v = value("--arena")?;
-                let (l, w) = v.split_once(['x', 'X', ',']).ok_or("--arena wants LxW, e.g. 762.5x495")?;
-                a.cfg.arena = Arena::new(num(l, "--arena")?, num(w, "--arena")?);
+                let (l, w) = args::arena(&value("--arena")?)?;
+                a.cfg.arena = Arena::new(l, w);
             }
-            "--start" => {
-                let v = value("--start")?;
-                let p: Vec<&str> = v.split(',').collect();
-                let [x, y, deg] = p.as_slice() else { return Err("--start wants X,Y,DEG".into()) };
-                a.cfg.start = PoseF64::new(num(x, "--start")?, num(y, "--start")?, num(deg, "--start")?.to_radians());
-            }
+            "--start" => start = Some(value("--start")?),
             "--seed" => a.cfg.seed = value("--seed")?.parse().map_err(|_| "--seed wants an integer")?,
             "--no-noise" => a.cfg.noise = Noise::OFF,
             "--kinematics" => {
@@ -74,37 +80,39 @@ fn parse_args() -> Result<Args, String> {
             "--out" => a.out = value("--out")?,
             "--quiet" => a.quiet = true,
             "--print-script" => a.print_script = true,
-            "-h" | "--help" => return Err(String::new()),
+            "-h" | "--help" => return Ok(None),
             f => return Err(format!("unknown option {f}")),
         }
     }
     if !(a.duration_s.is_finite() && a.duration_s >= 0.0 && a.duration_s <= 86_400.0) {
         return Err("--duration wants 0..86400 s".into());
     }
-    let ar = a.cfg.arena;
-    if !(ar.length_x > 0.0 && ar.width_y > 0.0 && ar.length_x < 30_000.0 && ar.width_y < 30_000.0) {
-        return Err("--arena wants sizes in 0..30000 mm".into());
+    if let Some(s) = start {
+        let (x, y, deg) = args::start(&s, a.cfg.arena.length_x, a.cfg.arena.width_y)?;
+        a.cfg.start = PoseF64::new(x, y, deg.to_radians());
+    } else if !a.cfg.arena.contains(a.cfg.start.x, a.cfg.start.y) {
+        return Err(format!(
+            "the default start ({}, {}) mm is outside a {} x {} mm arena: give --start",
+            a.cfg.start.x, a.cfg.start.y, a.cfg.arena.length_x, a.cfg.arena.width_y
+        ));
     }
-    Ok(a)
+    Ok(Some(a))
+}
+
+fn usage() -> String {
+    let doc = include_str!("simulate.rs");
+    doc.lines().skip(5).take(11).map(|l| l.trim_start_matches("//! ")).collect::<Vec<_>>().join("\n")
 }
 
 fn main() -> ExitCode {
     let args = match parse_args() {
-        Ok(a) => a,
+        Ok(Some(a)) => a,
+        Ok(None) => {
+            println!("{}", usage());
+            return ExitCode::SUCCESS;
+        }
         Err(e) => {
-            if !e.is_empty() {
-                eprintln!("simulate: {e}");
-            }
-            eprintln!(
-                "{}",
-                include_str!("simulate.rs")
-                    .lines()
-                    .skip(5)
-                    .take(12)
-                    .map(|l| l.trim_start_matches("//! "))
-                    .collect::<Vec<_>>()
-                    .join("\n")
-            );
+            eprintln!("simulate: {e}\n{}", usage());
             return ExitCode::from(2);
         }
     };
@@ -120,6 +128,9 @@ fn main() -> ExitCode {
     };
     if args.print_script {
         print!("{text}");
+        if !text.ends_with('\n') {
+            println!();
+        }
         return ExitCode::SUCCESS;
     }
     let script = match Script::parse(&text) {
@@ -135,7 +146,11 @@ fn main() -> ExitCode {
     let stdout = std::io::stdout();
     let mut out = std::io::BufWriter::new(stdout.lock());
     let quiet = args.quiet;
+    let mut refused = Vec::new();
     let samples = robot.run_script(&script, (args.duration_s * 1e6) as u64, 5, |line| {
+        if line.starts_with("# err") {
+            refused.push(line.to_string());
+        }
         if !quiet {
             let _ = writeln!(out, "{line}");
         }
@@ -180,13 +195,37 @@ fn main() -> ExitCode {
     eprintln!("  true      x {:8.1} mm  y {:8.1} mm  heading {:6.1} deg", t.x, t.y, t.theta.to_degrees());
     eprintln!("  estimate  x {:8.1} mm  y {:8.1} mm  heading {:6.1} deg", e.x, e.y, e.theta.to_degrees());
     eprintln!("  dead reck x {:8.1} mm  y {:8.1} mm  heading {:6.1} deg", d.x, d.y, d.theta.to_degrees());
+    let f = ctl.faults();
+    let n = samples.len().max(1) as f64;
+    let rms = |err: &dyn Fn(&PoseF64, &PoseF64) -> f64, of: &dyn Fn(&paperbot::sim::robot::Sample) -> PoseF64| {
+        (samples.iter().map(|s| err(&s.truth, &of(s)).powi(2)).sum::<f64>() / n).sqrt()
+    };
+    let mm = |a: &PoseF64, b: &PoseF64| a.distance(b);
+    let deg = |a: &PoseF64, b: &PoseF64| a.heading_error(b).to_degrees();
     eprintln!(
-        "  estimate error {:.1} mm, {:.1} deg (dead reckoning {:.1} mm); wall collisions: {} ticks; faults {:?}",
+        "  estimate error at the end {:.1} mm, {:.1} deg (dead reckoning {:.1} mm); wall collisions: {} ticks",
         t.distance(&e),
         t.heading_error(&e).to_degrees(),
         t.distance(&d),
         robot.collisions(),
-        ctl.faults()
     );
-    ExitCode::SUCCESS
+    eprintln!(
+        "  estimate error over the run (rms) {:.1} mm, {:.1} deg (dead reckoning {:.1} mm, {:.1} deg)",
+        rms(&mm, &|s| s.estimate),
+        rms(&deg, &|s| s.estimate),
+        rms(&mm, &|s| s.dead_reckoned),
+        rms(&deg, &|s| s.dead_reckoned),
+    );
+    eprintln!(
+        "  faults: bus {}, timeout {}, missing {}, bad sample {}, outliers {}, overruns {}",
+        f.bus, f.timeout, f.missing, f.bad_sample, f.rejected_outliers, f.overruns
+    );
+    if refused.is_empty() {
+        return ExitCode::SUCCESS;
+    }
+    eprintln!("simulate: the robot refused {} script command(s):", refused.len());
+    for r in &refused {
+        eprintln!("  {r}");
+    }
+    ExitCode::FAILURE
 }

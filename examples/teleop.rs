@@ -66,7 +66,6 @@ fn parse_args() -> Result<Args, String> {
                 }
             }
             "--no-keepalive" => a.keepalive = false,
-            "-h" | "--help" => return Err(String::new()),
             f if f.starts_with('-') && f != "-" => return Err(format!("unknown option {f}")),
             p if a.port.is_none() => a.port = Some(p.to_string()),
             p => return Err(format!("one port only ({p}?)")),
@@ -233,7 +232,7 @@ fn run_tui(
                     Some(Action::Slower) => {
                         driver.slower();
                     }
-                    Some(Action::ResetPose) => link::send(port, "reset")?,
+                    Some(Action::ResetPose) => link::send(port, &keys::reset_pose_command())?,
                     Some(Action::Status) => link::send(port, "status")?,
                     Some(Action::ToggleHelp) => help = !help,
                     Some(Action::Quit) => return Ok(()),
@@ -365,11 +364,12 @@ fn run() -> Result<(), String> {
 }
 
 fn main() -> ExitCode {
+    if std::env::args().skip(1).any(|a| a == "-h" || a == "--help") {
+        println!("{}", usage());
+        return ExitCode::SUCCESS;
+    }
     if let Err(e) = parse_args() {
-        if !e.is_empty() {
-            eprintln!("teleop: {e}");
-        }
-        eprintln!("{}", usage());
+        eprintln!("teleop: {e}\n{}", usage());
         return ExitCode::from(2);
     }
     match run() {

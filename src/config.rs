@@ -117,10 +117,12 @@ pub mod lidar {
     /// Readings past this are beyond the VL53L0X's reliable range in its
     /// default mode (1.2 m, datasheet): reported as no target.
     pub const MAX_READING_MM: u16 = 1200;
-    /// Front: `distance = 0.9849 reading - 56.2563` (report 3.3; the data's
-    /// direction of the fit).
+    /// Front: `distance = 0.9849 reading - 56.2563` (report 3.3: the reading
+    /// fitted on the true distance, inverted; `cargo run --example fit --
+    /// tests/data/lab1/lidar_front.csv` gives 0.9849 / -56.2555 from the data).
     pub const FRONT: LidarModel = LidarModel::new(0.9849, -56.2563, MIN_READING_MM, MAX_READING_MM);
-    /// Right: `distance = 0.9867 reading - 70.4578` (report 3.3).
+    /// Right: `distance = 0.9867 reading - 70.4578` (report 3.3; the fit
+    /// gives 0.9867 / -70.4605).
     pub const RIGHT: LidarModel = LidarModel::new(0.9867, -70.4578, MIN_READING_MM, MAX_READING_MM);
 
     /// Measurement timing budget, us (VL53L0X default 33 ms; at most one
@@ -211,10 +213,10 @@ pub mod pins {
 pub mod i2c {
     /// Both VL53L0X boot at 0x29 (datasheet).
     pub const LIDAR_DEFAULT_ADDR: u8 = 0x29;
-    /// Front lidar after bring-up (the course sketch used 22).
-    pub const FRONT_LIDAR_ADDR: u8 = 22;
-    /// Right lidar after bring-up (the course sketch used 25).
-    pub const RIGHT_LIDAR_ADDR: u8 = 25;
+    /// Front lidar after bring-up (the course sketch's 22, decimal).
+    pub const FRONT_LIDAR_ADDR: u8 = 0x16;
+    /// Right lidar after bring-up (the course sketch's 25, decimal).
+    pub const RIGHT_LIDAR_ADDR: u8 = 0x19;
     /// MPU9250 (AD0 low).
     pub const MPU9250_ADDR: u8 = 0x68;
     /// AK8963 once the MPU9250 is in bypass mode.
@@ -485,4 +487,9 @@ pub mod teleop {
     pub const FRAME_MS: u32 = 50;
     /// Messages (`#` lines) kept on the screen.
     pub const MESSAGES_SHOWN: usize = 8;
+    /// How long the line mode waits for the answer to its first `rate 0`,
+    /// dropping the rows the robot streamed before, ms: the answer comes
+    /// within a tick or two; a robot still booting may take longer, and the
+    /// run then goes on without it.
+    pub const ANSWER_WAIT_MS: u32 = 1_000;
 }

@@ -80,8 +80,6 @@ fn replay_reproduces_the_estimator_bit_for_bit_and_tracks_the_truth() {
     let (rms_pos, rms_deg) = ((se_pos / n).sqrt(), (se_deg / n).sqrt());
     println!("replay of the sample: {rms_pos:.2} mm / {rms_deg:.2} deg rms against the truth over {n} rows");
     assert!(n > 1900.0 && rms_pos < 15.0 && rms_deg < 2.0);
-    let svg = replay::to_svg(&est, Arena::DEFAULT);
-    assert!(svg.starts_with("<svg") && svg.contains("<polyline") && svg.trim_end().ends_with("</svg>"));
 }
 
 #[test]

@@ -36,7 +36,13 @@ impl Drop for StopOnDrop {
 /// Runs a plan through the line mode against a fresh simulated robot: the
 /// robot served on a PTY on this thread (the simulator is single-threaded),
 /// the tool in another, opening the PTY's path as it opens the robot's port.
-fn drive(plan: &str, opts: LineModeOptions) -> (LineModeReport, String, Vec<Sample>, Option<String>, Server) {
+/// With `streaming_hz` the robot already streams telemetry at that rate,
+/// and the tool starts 300 ms into it without clearing its input.
+fn drive(
+    plan: &str,
+    opts: LineModeOptions,
+    streaming_hz: Option<u16>,
+) -> (LineModeReport, String, Vec<Sample>, Option<String>, Server) {
     let cfg = SimConfig { noise: Noise::OFF, ..SimConfig::default() };
     let (mut master, slave) = TTYPort::pair().expect("a pseudo-terminal");
     master.set_timeout(Duration::ZERO).expect("non-blocking master");
@@ -46,17 +52,28 @@ fn drive(plan: &str, opts: LineModeOptions) -> (LineModeReport, String, Vec<Samp
     let guard = StopOnDrop(Arc::clone(&stop));
     let client = std::thread::spawn(move || {
         let _guard = guard;
+        if streaming_hz.is_some() {
+            std::thread::sleep(Duration::from_millis(300));
+        }
         let mut port = serialport::new(&path, config::serial::BAUD)
             .timeout(Duration::from_millis(5))
             .open()
             .unwrap_or_else(|e| panic!("{path}: {e}"));
-        port.clear(serialport::ClearBuffer::Input).expect("flush stale output");
+        // a USB serial chip still holds rows after the OS's buffer is
+        // cleared (as the tool does); a streaming robot's rows are all kept
+        if streaming_hz.is_none() {
+            port.clear(serialport::ClearBuffer::Input).expect("flush stale output");
+        }
         let mut out = Vec::new();
         let mut rec = Recorder::new(Vec::new()).unwrap();
         let report = run_line_mode(&mut *port, plan, opts, &mut out, Some(&mut rec)).expect("line mode");
         (report, out, rec.replay_start(), rec.into_inner())
     });
-    let mut server = Server::new(SimRobot::new(cfg));
+    let mut robot = SimRobot::new(cfg);
+    if let Some(hz) = streaming_hz {
+        robot.send(&format!("rate {hz}"));
+    }
+    let mut server = Server::new(robot);
     server.run(&mut master, &stop).expect("the server runs");
     let (report, out, start, log) = client.join().expect("the line mode ran");
     drop(slave);
@@ -91,7 +108,7 @@ fn line_mode_drives_the_simulated_robot_over_a_pty_and_records_a_replayable_log(
     let opts = LineModeOptions { linger_ms: 300, rate_hz: Some(rate), ..LineModeOptions::default() };
     // untimed motions: only the keep-alive holds them past the deadman
     let plan = "@200ms fwd 0.137\n@1700ms cw 2.839\n@2300ms stop\n";
-    let (report, out, samples, start, server) = drive(plan, opts);
+    let (report, out, samples, start, server) = drive(plan, opts, None);
 
     assert_eq!((report.sent, report.errors), (3, 0), "{out}");
     // 1.5 s of fwd and 0.6 s of cw at one repeat per REFRESH_MS (125 ms)
@@ -191,9 +208,25 @@ fn line_mode_drives_the_simulated_robot_over_a_pty_and_records_a_replayable_log(
 }
 
 #[test]
+fn rows_streamed_before_the_run_are_dropped_so_the_output_is_one_csv() {
+    let opts = LineModeOptions { linger_ms: 200, rate_hz: Some(20), ..LineModeOptions::default() };
+    let (report, out, samples, _, _) = drive("@100ms fwd 0.137 0.5\n", opts, Some(50));
+    assert_eq!((report.sent, report.errors), (1, 0), "{out}");
+    // what pandas.read_csv(log, comment='#') reads: the header first, then rows of its width
+    let csv: Vec<&str> = out.lines().filter(|l| !l.starts_with('#')).collect();
+    assert_eq!(classify_line(csv[0]), LineKind::Header, "the first CSV line:\n{out}");
+    let width = csv[0].split(',').count();
+    assert!(csv[1..].iter().all(|l| l.split(',').count() == width && classify_line(l) != LineKind::Header), "{out}");
+    assert_eq!(out.lines().next(), Some("# ok rate 0"), "{out}");
+    // only rows at 20 Hz (50 ms apart after the first), none of the 50 Hz stream before
+    assert!(samples.len() >= 5, "{} rows", samples.len());
+    assert!(samples[1..].windows(2).all(|w| w[1].t_ms - w[0].t_ms == 50), "{samples:?}");
+}
+
+#[test]
 fn without_keepalive_the_robots_deadman_cuts_an_untimed_drive() {
     let opts = LineModeOptions { linger_ms: 200, keepalive: false, rate_hz: Some(50), ..LineModeOptions::default() };
-    let (report, out, samples, _, _) = drive("@100ms fwd 0.137\n@1500ms status\n", opts);
+    let (report, out, samples, _, _) = drive("@100ms fwd 0.137\n@1500ms status\n", opts, None);
     assert_eq!((report.sent, report.refreshes, report.errors), (2, 0, 0), "{out}");
     let (f0, f1) = stretch(&samples, commands(Motion::Straight(Speed::from_mm_s(137))));
     // the deadman stops it DEADMAN_MS after the command (rows every 20 ms)

@@ -83,7 +83,7 @@
 //! magnetometer counts and the corrected field (chip axes), the compass
 //! heading, then the fault counters ([`FaultCounters`]). A field is empty
 //! when there was no fresh reading. `pandas.read_csv(f, comment='#')` reads
-//! a log directly; [`parse_telemetry_row`] (feature `std`) reads a row back
+//! a log directly; `parse_telemetry_row` (feature `std`) reads a row back
 //! into exactly the numbers written.
 
 pub mod command;

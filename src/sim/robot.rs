@@ -12,7 +12,7 @@
 //! 2. the control loop ticks: its drivers talk to the fake chips over the
 //!    simulated bus (register level), it reads, steps, acts, reports;
 //! 3. the body moves for one period by what its servo commands make by the
-//!    actuator model ([`ActuatorModel::motion_from_commands`]), with
+//!    actuator model ([`ActuatorModel::motion_from_commands`](crate::model::actuator::ActuatorModel::motion_from_commands)), with
 //!    per-tick noise on the speed and turn rate.
 //!
 //! Commands go in byte by byte ([`SimRobot::feed`]) and the loop's output

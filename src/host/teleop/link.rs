@@ -214,7 +214,32 @@ where
     Ok(())
 }
 
-/// Runs the line mode: asks for telemetry at `rate_hz` if set, sends each plan line at
+/// Reads and drops lines until one equal to `answer`, then writes it and
+/// whatever came after it in the same read to `out`; gives up after
+/// `wait_ms`. True when the answer came.
+fn drain_until<P: Read + ?Sized, O: Write + ?Sized>(
+    port: &mut P,
+    reader: &mut LineReader,
+    answer: &str,
+    wait_ms: u32,
+    out: &mut O,
+) -> io::Result<bool> {
+    let start = Instant::now();
+    while start.elapsed().as_millis() < u128::from(wait_ms) {
+        let lines = reader.poll(port)?;
+        if let Some(at) = lines.iter().position(|l| l == answer) {
+            for line in lines.iter().skip(at) {
+                writeln!(out, "{line}")?;
+            }
+            return Ok(true);
+        }
+    }
+    Ok(false)
+}
+
+/// Runs the line mode: asks for telemetry at `rate_hz` if set (`rate 0`
+/// first; what the robot sent before its answer is dropped, so the output
+/// starts with that answer and the new CSV header), sends each plan line at
 /// its time (and keeps untimed motions alive), prints every line the robot
 /// sends to `out` as it comes, records telemetry rows into `recorder`,
 /// listens `linger_ms` after the last line, then sends `stop`.
@@ -237,7 +262,14 @@ where
     let mut dash = Dashboard::new();
     let mut schedule = LineSchedule::new(plan, opts.keepalive, opts.refresh_ms);
     if let Some(hz) = opts.rate_hz {
-        start_telemetry(port, hz)?;
+        send(port, "rate 0")?;
+        // rows the robot sent before the run (still in flight or buffered)
+        // end at the answer; only what follows it is printed, so the
+        // output's first CSV line is the header `rate` brings
+        drain_until(port, &mut reader, "# ok rate 0", config::teleop::ANSWER_WAIT_MS, out)?;
+        if hz > 0 {
+            send(port, &std::format!("rate {hz}"))?;
+        }
     }
     let mut stop_at: Option<u64> = None;
     loop {

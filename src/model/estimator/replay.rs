@@ -1,5 +1,6 @@
 //! Host side of `cargo run --example replay`: reads a recorded run, runs the
-//! same [`Estimator`] the robot runs, and writes the path as CSV and SVG.
+//! same [`Estimator`] the robot runs, and writes the path as CSV (the tool
+//! draws it with `sim::svg`).
 //!
 //! Log format (CSV with a header line):
 //! `t_ms,left_cmd,right_cmd,front_mm,right_mm,heading_deg` - time in ms
@@ -178,47 +179,5 @@ pub fn to_csv(estimates: &[Estimate]) -> String {
             e.pose.theta.to_radians_f64().to_degrees()
         );
     }
-    s
-}
-
-/// The path in the arena as an SVG drawing: north up, east right, 1 px per mm.
-pub fn to_svg(estimates: &[Estimate], arena: Arena) -> String {
-    let (lx, wy) = (arena.length_x.to_mm_f64(), arena.width_y.to_mm_f64());
-    let m = 20.0;
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{:.0}" height="{:.0}" viewBox="{} {} {:.1} {:.1}">"#,
-        wy + 2.0 * m,
-        lx + 2.0 * m,
-        -m,
-        -m,
-        wy + 2.0 * m,
-        lx + 2.0 * m
-    );
-    // svg x = east (y), svg y = down = south: lx - x
-    let _ = writeln!(s, r#"<rect x="0" y="0" width="{wy:.1}" height="{lx:.1}" fill="none" stroke="black"/>"#);
-    let mut pts = String::new();
-    for e in estimates {
-        let _ = write!(pts, "{:.1},{:.1} ", e.pose.y.to_mm_f64(), lx - e.pose.x.to_mm_f64());
-    }
-    let _ = writeln!(s, r#"<polyline points="{}" fill="none" stroke="blue" stroke-width="1.5"/>"#, pts.trim_end());
-    if let Some(e) = estimates.first() {
-        let _ = writeln!(
-            s,
-            r#"<circle cx="{:.1}" cy="{:.1}" r="5" fill="green"/>"#,
-            e.pose.y.to_mm_f64(),
-            lx - e.pose.x.to_mm_f64()
-        );
-    }
-    if let Some(e) = estimates.last() {
-        let _ = writeln!(
-            s,
-            r#"<circle cx="{:.1}" cy="{:.1}" r="5" fill="red"/>"#,
-            e.pose.y.to_mm_f64(),
-            lx - e.pose.x.to_mm_f64()
-        );
-    }
-    s.push_str("</svg>\n");
     s
 }

@@ -1,0 +1,140 @@
+//! The host tools (`examples/`) as a user runs them: `--help` on stdout
+//! with exit code 0, bad options and bad input refused with a message and a
+//! non-zero exit code, the files they write. `cargo test` builds the
+//! examples first (`cargo build --examples` when running this file alone).
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+fn tool(name: &str) -> Command {
+    // target/debug/deps/tools-HASH -> target/debug/examples/NAME
+    let exe = std::env::current_exe().unwrap();
+    let path: PathBuf = exe.parent().unwrap().parent().unwrap().join("examples").join(name);
+    assert!(path.exists(), "{} is not built: run `cargo build --examples`", path.display());
+    let mut c = Command::new(path);
+    c.current_dir(std::env::temp_dir());
+    c
+}
+
+fn run(name: &str, args: &[&str]) -> Output {
+    tool(name).args(args).output().unwrap()
+}
+
+fn text(b: &[u8]) -> String {
+    String::from_utf8_lossy(b).into_owned()
+}
+
+fn data(file: &str) -> String {
+    format!("{}/tests/data/{file}", env!("CARGO_MANIFEST_DIR"))
+}
+
+fn scratch(name: &str) -> PathBuf {
+    std::env::temp_dir().join(format!("paperbot-tools-{}-{name}", std::process::id()))
+}
+
+#[test]
+fn help_goes_to_stdout_with_exit_code_0_on_every_tool() {
+    for name in ["fit", "replay", "simulate", "teleop", "sim_pty"] {
+        let out = run(name, &["--help"]);
+        let help = text(&out.stdout);
+        assert!(out.status.success(), "{name}: {:?} {}", out.status, text(&out.stderr));
+        assert!(help.contains("usage") || help.contains("cargo run"), "{name}: {help}");
+        assert!(!help.contains("```"), "{name}: {help}");
+        assert!(out.stderr.is_empty(), "{name}: {}", text(&out.stderr));
+    }
+}
+
+#[test]
+fn fit_refuses_non_finite_and_zero_times_and_too_few_pairs() {
+    let head = "motion,left_cmd,right_cmd,trial,seconds,what_was_timed\n";
+    for (name, body) in [
+        ("nan", "forward,100,80,1,nan,x\nforward,110,70,1,3,x\n"),
+        ("inf", "forward,100,80,1,inf,x\nforward,110,70,1,3,x\n"),
+        ("zero", "forward,100,80,1,0,x\nforward,110,70,1,3,x\n"),
+        ("one-pair", "forward,100,80,1,3,x\nforward,100,80,2,3.1,x\n"),
+        ("no-rows", ""),
+    ] {
+        let path = scratch(&format!("{name}.csv"));
+        std::fs::write(&path, format!("{head}{body}")).unwrap();
+        let out = run("fit", &[path.to_str().unwrap()]);
+        std::fs::remove_file(&path).unwrap();
+        assert_eq!(out.status.code(), Some(1), "{name}: {}", text(&out.stdout));
+        assert!(out.stdout.is_empty(), "{name}: nothing to paste, got {}", text(&out.stdout));
+        assert!(text(&out.stderr).starts_with("fit: "), "{name}: {}", text(&out.stderr));
+    }
+    let out = run("fit", &[&data("lab1/lidar_front.csv")]);
+    assert!(out.status.success());
+    assert!(text(&out.stdout).contains("LidarModel::new(0.9849, -56.2555,"), "{}", text(&out.stdout));
+    assert_eq!(run("fit", &[&data("lab1/lidar_front.csv"), "--all-readings"]).status.code(), Some(2));
+}
+
+#[test]
+fn replay_takes_simulates_syntax_and_draws_a_labelled_picture() {
+    let svg = scratch("replay.svg");
+    let out = run(
+        "replay",
+        &[&data("estimator/replay_sample.csv"), "--arena", "800x500", "--start", "153.6,146.5,0", "--out"],
+    );
+    assert_eq!(out.status.code(), Some(2), "--out without a value");
+    let out = tool("replay")
+        .args([&data("estimator/replay_sample.csv"), "--arena", "800x500", "--start", "153.6,146.5,0", "--out"])
+        .arg(&svg)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert_eq!(text(&out.stdout).lines().count(), 2001, "header and one row per log row");
+    let picture = std::fs::read_to_string(&svg).unwrap();
+    std::fs::remove_file(&svg).unwrap();
+    for want in ["paperbot replay of", "arena 800.0 x 500.0 mm", "N ^", "firmware estimate", "open circle: start"] {
+        assert!(picture.contains(want), "no {want:?} in the SVG");
+    }
+    // an empty log: an error, and no picture
+    let log = scratch("empty.csv");
+    std::fs::write(&log, "t_ms,left_cmd,right_cmd,front_mm,right_mm,heading_deg\n").unwrap();
+    let out = tool("replay").arg(&log).arg("--out").arg(&svg).output().unwrap();
+    std::fs::remove_file(&log).unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    assert!(text(&out.stderr).contains("no rows"), "{}", text(&out.stderr));
+    assert!(!svg.exists(), "no SVG for an empty log");
+}
+
+#[test]
+fn arena_and_start_outside_it_are_refused_clearly() {
+    for (name, args, want) in [
+        ("simulate", &["--arena", "0x0"][..], "--arena 0x0: each side must be 1..30000 mm"),
+        ("simulate", &["--arena", "800"][..], "--arena wants LxW"),
+        ("simulate", &["--start", "900,100,0"][..], "outside the 762.5 x 495 mm arena"),
+        ("simulate", &["--arena", "100x100"][..], "default start (180, 130) mm is outside"),
+        ("replay", &["log.csv", "--arena", "0x0"][..], "--arena 0x0: each side must be 1..30000 mm"),
+        ("replay", &["log.csv", "--start", "100,-5,0"][..], "outside the 762.5 x 495 mm arena"),
+        ("sim_pty", &["--start", "100,600,0"][..], "outside the 762.5 x 495 mm arena"),
+    ] {
+        let out = run(name, args);
+        assert!(!out.status.success(), "{name} {args:?}");
+        assert!(text(&out.stderr).contains(want), "{name} {args:?}: {}", text(&out.stderr));
+    }
+}
+
+#[test]
+fn simulate_fails_when_the_robot_refuses_a_script_command_and_quiet_prints_nothing() {
+    let script = scratch("script.txt");
+    let svg = scratch("sim.svg");
+    std::fs::write(&script, "@0 fwd 0.13 0.5\n@0.6 fwd 5\n").unwrap();
+    let out = tool("simulate")
+        .args(["--duration", "1", "--quiet", "--script"])
+        .arg(&script)
+        .arg("--out")
+        .arg(&svg)
+        .output()
+        .unwrap();
+    std::fs::remove_file(&script).unwrap();
+    std::fs::remove_file(&svg).unwrap();
+    let err = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(out.stdout.is_empty(), "--quiet: {}", text(&out.stdout));
+    assert!(err.contains("refused 1 script command") && err.contains("# err speed out of range"), "{err}");
+    assert!(err.contains("faults: bus 0, timeout 0, missing 0, bad sample 0, outliers 0, overruns 0"), "{err}");
+    assert!(err.ends_with('\n'), "{err:?}");
+    let out = run("simulate", &["--print-script"]);
+    assert!(out.status.success() && text(&out.stdout).ends_with('\n'));
+}
