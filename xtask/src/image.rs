@@ -56,6 +56,9 @@ pub fn main(args: &[String]) -> Result<(), String> {
     println!("== registry crates with assembly, rewritten (target/image/crates/)");
     run(Command::new("cargo").args(["fetch", "--quiet"]).current_dir(&root))?;
     let patched = patch::prepare(&root.join("Cargo.lock"), &work)?;
+    // The build's own lockfile: the repository's versions, to which cargo
+    // adds the patched path crates (the repository's stays as it is).
+    fs::copy(root.join("Cargo.lock"), work.join("Cargo.lock")).map_err(|e| format!("Cargo.lock: {e}"))?;
 
     println!("== our assembly (xtensa/asm/)");
     let objects = assemble(&root, &work)?;
@@ -131,9 +134,7 @@ fn assemble(root: &Path, work: &Path) -> Result<Vec<PathBuf>, String> {
 /// passed on the command line, so that the repository's own files stay as
 /// the esp toolchain reads them.
 fn nightly_cargo(root: &Path, work: &Path, patched: &[patch::Patched], objects: &[PathBuf], verb: &str) -> Command {
-    // The lockfile: the repository's versions, plus the patched path crates.
     let lock = work.join("Cargo.lock");
-    let _ = fs::copy(root.join("Cargo.lock"), &lock);
     let target = root.join("xtensa/xtensa-esp8266-none-elf.json");
     let link_args: Vec<String> = objects.iter().map(|o| format!("\"-C\", \"link-arg={}\"", o.display())).collect();
 
