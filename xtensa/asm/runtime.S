@@ -9,13 +9,7 @@
      the ordering argument says.
    In IRAM: the servo interrupt uses the atomics. */
 
-    .macro FUNC name
-    .section .rwtext.\name, "ax"
-    .global \name
-    .type \name, @function
-    .align 4
-\name:
-    .endm
+#include "function.inc"
 
 FUNC abort
     ill

@@ -12,34 +12,28 @@
    register read `rer`, PRID), and set_stack_pointer, which only works
    inline. */
 
-    .macro LEAF name
-    .section .rwtext.\name, "ax"
-    .global \name
-    .type \name, @function
-    .align 4
-\name:
-    .endm
+#include "function.inc"
 
 /* lib.rs */
-LEAF xtensa_lx_set_vecbase          /* (base: *const u32) */
+FUNC xtensa_lx_set_vecbase          /* (base: *const u32) */
     wsr.vecbase a2
     ret
-LEAF xtensa_lx_get_stack_pointer    /* -> *const u32: a leaf keeps the caller's sp */
+FUNC xtensa_lx_get_stack_pointer    /* -> *const u32: a leaf keeps the caller's sp */
     mov     a2, a1
     ret
-LEAF xtensa_lx_get_program_counter  /* -> *const u32: the return address, in the caller */
+FUNC xtensa_lx_get_program_counter  /* -> *const u32: the return address, in the caller */
     mov     a2, a0
     ret
-LEAF xtensa_lx_debug_break
+FUNC xtensa_lx_debug_break
     break   1, 15
     ret
 
 /* interrupt.rs */
-LEAF xtensa_lx_interrupt_set_mask   /* (mask) -> previous INTENABLE */
+FUNC xtensa_lx_interrupt_set_mask   /* (mask) -> previous INTENABLE */
     xsr.intenable a2
     rsync
     ret
-LEAF xtensa_lx_interrupt_disable_mask   /* (mask) -> previous INTENABLE */
+FUNC xtensa_lx_interrupt_disable_mask   /* (mask) -> previous INTENABLE */
     movi    a3, 0
     xsr.intenable a3                /* all off while we compute */
     movi    a4, -1
@@ -50,7 +44,7 @@ LEAF xtensa_lx_interrupt_disable_mask   /* (mask) -> previous INTENABLE */
     rsync
     mov     a2, a3
     ret
-LEAF xtensa_lx_interrupt_enable_mask    /* (mask) -> previous INTENABLE */
+FUNC xtensa_lx_interrupt_enable_mask    /* (mask) -> previous INTENABLE */
     movi    a3, 0
     xsr.intenable a3
     or      a4, a3, a2
@@ -59,31 +53,31 @@ LEAF xtensa_lx_interrupt_enable_mask    /* (mask) -> previous INTENABLE */
     rsync
     mov     a2, a3
     ret
-LEAF xtensa_lx_interrupt_get_mask
+FUNC xtensa_lx_interrupt_get_mask
     rsr.intenable a2
     ret
-LEAF xtensa_lx_interrupt_get        /* pending interrupts */
+FUNC xtensa_lx_interrupt_get        /* pending interrupts */
     rsr.interrupt a2
     ret
-LEAF xtensa_lx_interrupt_set        /* (mask): software interrupts */
+FUNC xtensa_lx_interrupt_set        /* (mask): software interrupts */
     wsr.intset a2
     ret
-LEAF xtensa_lx_interrupt_clear      /* (mask): edge and software interrupts */
+FUNC xtensa_lx_interrupt_clear      /* (mask): edge and software interrupts */
     wsr.intclear a2
     ret
-LEAF xtensa_lx_interrupt_get_level  /* PS.INTLEVEL */
+FUNC xtensa_lx_interrupt_get_level  /* PS.INTLEVEL */
     rsr.ps  a2
     extui   a2, a2, 0, 4
     ret
 
 /* timer.rs */
-LEAF xtensa_lx_timer_get_ccompare0
+FUNC xtensa_lx_timer_get_ccompare0
     rsr.ccompare0 a2
     ret
-LEAF xtensa_lx_timer_set_ccompare0  /* (val) */
+FUNC xtensa_lx_timer_set_ccompare0  /* (val) */
     wsr.ccompare0 a2
     isync
     ret
-LEAF xtensa_lx_timer_get_cycle_count
+FUNC xtensa_lx_timer_get_cycle_count
     rsr.ccount a2
     ret

@@ -26,13 +26,7 @@
 /* EXCCAUSE of a level-1 interrupt */
     .set CAUSE_LEVEL1_INTERRUPT, 4
 
-    .macro FUNC name, section
-    .section \section, "ax"
-    .global \name
-    .type \name, @function
-    .align 4
-\name:
-    .endm
+#include "function.inc"
 
 /* ---- the vectors -------------------------------------------------------- */
 
@@ -80,7 +74,7 @@ _DoubleExceptionVector:
 /* ---- saving and restoring the interrupted context ----------------------- */
 
 /* a2..a15 and SAR into the frame at sp. Called with call0; uses a3. */
-FUNC save_context, .rwtext.save_context
+FUNC save_context
     s32i    a2,  sp, 16
     s32i    a3,  sp, 20
     s32i    a4,  sp, 24
@@ -100,7 +94,7 @@ FUNC save_context, .rwtext.save_context
     ret
 
 /* SAR and a2..a15 from the frame at sp. Called with call0. */
-FUNC restore_context, .rwtext.restore_context
+FUNC restore_context
     l32i    a3,  sp, FRAME_SAR
     wsr     a3,  sar
     l32i    a2,  sp, 16
@@ -155,7 +149,7 @@ FUNC restore_context, .rwtext.restore_context
 
 /* The user vector: level-1 interrupts go to __level_1_interrupt(1, frame),
    every other cause to __exception(cause, frame). */
-FUNC __default_naked_exception, .rwtext.__default_naked_exception
+FUNC __default_naked_exception
     ENTER   epc1
     rsr     a2, exccause
     mov     a3, sp
@@ -169,7 +163,7 @@ FUNC __default_naked_exception, .rwtext.__default_naked_exception
 
 /* Kernel, NMI, debug and alloca exceptions: handler(cause, frame). */
     .macro HANDLER name, handler
-FUNC \name, .rwtext.\name
+FUNC \name
     ENTER   epc1
     l32i    a2, sp, FRAME_EXCCAUSE
     mov     a3, sp
@@ -185,7 +179,7 @@ FUNC \name, .rwtext.\name
 
 /* A double exception: __double_exception(cause, frame), which does not
    return (its default panics). */
-FUNC __default_naked_double_exception, .rwtext.__default_naked_double_exception
+FUNC __default_naked_double_exception
     ENTER   depc
     l32i    a2, sp, FRAME_EXCCAUSE
     mov     a3, sp
@@ -194,12 +188,12 @@ FUNC __default_naked_double_exception, .rwtext.__default_naked_double_exception
 
 /* ---- the crate's two leaves --------------------------------------------- */
 
-FUNC xtensa_lx_rt_set_vecbase, .rwtext.xtensa_lx_rt_set_vecbase   /* (base) */
+FUNC xtensa_lx_rt_set_vecbase   /* (base) */
     wsr.vecbase a2
     ret
 
 /* The crate zeroes CCOMPAREn only where its build script finds timers in
    the core's configuration, which it does for the ESP32s, not for the
    ESP8266: here too, nothing. */
-FUNC xtensa_lx_rt_reset_internal_timers, .rwtext.xtensa_lx_rt_reset_internal_timers
+FUNC xtensa_lx_rt_reset_internal_timers
     ret
