@@ -130,6 +130,7 @@ struct Esp8266State {
     uint32_t input_gap_ms, stop_ms;
     FILE *events;
     QEMUTimer *stop_timer;
+    bool stopped;               /* past stop-ms: nothing more leaves the board */
 
     MemoryRegion flash_mr, dport_mr, periph_mr, uart_mr, gpio_mr, rtc_mr,
                  frc1_mr, wdt_mr;
@@ -181,7 +182,7 @@ static void log_event(Esp8266State *s, const char *fmt, ...)
 {
     va_list ap;
 
-    if (!s->events) {
+    if (!s->events || s->stopped) {
         return;
     }
     fprintf(s->events, "%" PRId64 " ", now_ns());
@@ -374,7 +375,9 @@ static void uart_tx_done(void *opaque)
     Esp8266State *s = opaque;
     uint8_t b = fifo_pop(&s->tx);
 
-    qemu_chr_fe_write_all(&s->chr, &b, 1);
+    if (!s->stopped) {
+        qemu_chr_fe_write_all(&s->chr, &b, 1);
+    }
     input_watch_tx(s, b);
     if (s->tx.count) {
         timer_mod(s->tx_timer, now_ns() + uart_frame_ns(s));
@@ -842,6 +845,16 @@ static void wdt_start_stage(Esp8266State *s, unsigned stage)
               wdt_stage_ns(stage == 0 ? s->wdt_op : s->wdt_op_nd));
 }
 
+static void esp8266_reset(void *opaque);
+
+/* The chip resets at the CPU's next instruction boundary: the reset runs as
+ * work on the vCPU thread. (A system reset request would wait for the main
+ * loop, which under -icount sleep=off runs late in virtual time.) */
+static void wdt_reset_chip(CPUState *cpu, run_on_cpu_data data)
+{
+    esp8266_reset(data.host_ptr);
+}
+
 static void wdt_expired(void *opaque)
 {
     Esp8266State *s = opaque;
@@ -856,7 +869,7 @@ static void wdt_expired(void *opaque)
     log_event(s, "reset watchdog");
     error_report("esp8266: watchdog reset at %.6f s (virtual): the firmware "
                  "stopped feeding it", now_ns() / 1e9);
-    qemu_system_reset_request(SHUTDOWN_CAUSE_GUEST_RESET);
+    async_run_on_cpu(CPU(s->cpu), wdt_reset_chip, RUN_ON_CPU_HOST_PTR(s));
 }
 
 static uint64_t wdt_read(void *opaque, hwaddr addr, unsigned size)
@@ -1041,12 +1054,15 @@ static FILE *open_events(const char *path)
     return f;
 }
 
-/* The end of a timed run (stop-ms): QEMU exits with status 0. */
+/* The end of a timed run (stop-ms): QEMU exits with status 0. The main loop
+ * acts on the request a little later; what the guest sends meanwhile is
+ * dropped, so a run's output ends at exactly stop-ms. */
 static void stop_expired(void *opaque)
 {
     Esp8266State *s = opaque;
 
     log_event(s, "stop");
+    s->stopped = true;
     qemu_system_shutdown_request(SHUTDOWN_CAUSE_HOST_QMP_QUIT);
 }
 
