@@ -110,19 +110,19 @@ impl Board {
         let mut child = self
             .command(s, None, &icount, "pty")
             .stdin(Stdio::null())
-            .stderr(Stdio::piped())
+            .stdout(Stdio::piped())
             .spawn()
             .map_err(|e| format!("cannot start QEMU: {e}"))?;
-        let stderr = BufReader::new(child.stderr.take().ok_or("no stderr")?);
-        for line in stderr.lines().map_while(Result::ok) {
-            // QEMU: "char device redirected to /dev/pts/N (label serial0)"
+        // QEMU prints "char device redirected to /dev/pts/N (label serial0)"
+        let stdout = BufReader::new(child.stdout.take().ok_or("no stdout")?);
+        for line in stdout.lines().map_while(Result::ok) {
             match line.split_once("redirected to ") {
                 Some((_, rest)) => {
                     let pty = rest.split_whitespace().next().unwrap_or(rest);
-                    println!("UART0 is on {pty} (stop with Ctrl-C); drive it with");
+                    println!("UART0 is on {pty} (stop with Ctrl-C); drive the robot with");
                     println!("  cargo run --example teleop -- {pty}");
                 }
-                None => eprintln!("{line}"),
+                None => println!("{line}"),
             }
         }
         let status = child.wait().map_err(|e| format!("QEMU: {e}"))?;
