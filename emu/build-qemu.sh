@@ -144,5 +144,7 @@ build_test_image "$tmp/wdt-starve.elf"
 cp "$qemu_src/build/qemu-system-xtensa" "$tmp/"
 rm -rf "$out"
 mv "$tmp" "$out"
+# builds of older sources, unused for a month
+find "$cache" -maxdepth 1 -name 'emu-*' ! -name "$(basename "$out")" -mtime +30 -exec rm -rf {} +
 say "built $out"
 echo "$out"
