@@ -43,7 +43,7 @@
 //! clock difference is wrapping or saturating, every index is checked.
 
 use crate::config;
-use crate::control::protocol::number::{div_rem_1000, push_str, put_template, TextOut};
+use crate::control::protocol::number::{div_rem_1000, push_fixed_parts, push_i32, push_str, push_u32, TextOut};
 use crate::control::protocol::Overflow;
 use crate::control::protocol::{
     format_response, format_status, format_telemetry, telemetry_header, Command, FaultCounters, LineBuffer, OutLine,
@@ -953,34 +953,43 @@ fn q16_to_micro(a: u32) -> u32 {
 
 /// The answer line to a calibration sweep's end: `# ...` for a result (or
 /// an abandoned sweep), `# err ...` (the protocol's `ERR`) for a failure.
-/// Each literal carries its prefix: one string per line is 92 bytes less
-/// flash than a separate prefix; `tests/control.rs` pins four of the five.
+/// `tests/control.rs` pins the lines.
 fn calibration_report(
     t: &mut dyn TextOut,
     result: Option<Result<MagCalibration, CalibrationError>>,
     samples: u16,
     sectors: u8,
 ) -> Result<(), Overflow> {
-    let samples = u32::from(samples);
     match result {
-        None => put_template(t, "# calibration abandoned after %0 samples", &[samples], &[]),
-        Some(Ok(_)) => put_template(
-            t,
-            "# calibration ok: %0 samples, %0 of 12 sectors; applied. For config::compass:",
-            &[samples, u32::from(sectors)],
-            &[],
-        ),
-        Some(Err(CalibrationError::NotEnoughSamples { have, need })) => {
-            put_template(t, "# err calibration timed out: %0 of %0 samples", &[u32::from(have), u32::from(need)], &[])
+        None => {
+            push_str(t, "# calibration abandoned after ")?;
+            push_u32(t, u32::from(samples))?;
+            push_str(t, " samples")
         }
-        Some(Err(CalibrationError::SweepIncomplete { sectors, need })) => put_template(
-            t,
-            "# err calibration failed: the turn covered %0 of 12 sectors, need %0",
-            &[u32::from(sectors), u32::from(need)],
-            &[],
-        ),
+        Some(Ok(_)) => {
+            push_str(t, "# calibration ok: ")?;
+            push_u32(t, u32::from(samples))?;
+            push_str(t, " samples, ")?;
+            push_u32(t, u32::from(sectors))?;
+            push_str(t, " of 12 sectors; applied. For config::compass:")
+        }
+        Some(Err(CalibrationError::NotEnoughSamples { have, need })) => {
+            push_str(t, "# err calibration timed out: ")?;
+            push_u32(t, u32::from(have))?;
+            push_str(t, " of ")?;
+            push_u32(t, u32::from(need))?;
+            push_str(t, " samples")
+        }
+        Some(Err(CalibrationError::SweepIncomplete { sectors, need })) => {
+            push_str(t, "# err calibration failed: the turn covered ")?;
+            push_u32(t, u32::from(sectors))?;
+            push_str(t, " of 12 sectors, need ")?;
+            push_u32(t, u32::from(need))
+        }
         Some(Err(CalibrationError::Degenerate { axis })) => {
-            put_template(t, "# err calibration failed: magnetometer axis %0 never changed", &[u32::from(axis)], &[])
+            push_str(t, "# err calibration failed: magnetometer axis ")?;
+            push_u32(t, u32::from(axis))?;
+            push_str(t, " never changed")
         }
     }
 }
@@ -989,18 +998,25 @@ fn calibration_report(
 /// (the same text as `driver::calibration::ConfigLine`, written without
 /// `core::fmt`): biases as integers, scales with six decimals.
 fn push_config_line(out: &mut dyn TextOut, cal: &MagCalibration) -> Result<(), Overflow> {
-    let [b0, b1, b2] = cal.bias;
-    // q16 * 10^6 / 2^16 rounded half away from zero (as math::div_round):
-    // the sign as text, as a magnitude may pass i32::MAX (and |q16| >= 1
-    // gives at least 15 millionths: no "-0")
-    let [m0, m1, m2] = cal.scale_q16.map(|q16| q16_to_micro(q16.unsigned_abs()));
-    let [n0, n1, n2] = cal.scale_q16.map(|q16| if q16 < 0 { "-" } else { "" });
-    put_template(
-        out,
-        "pub const CALIBRATION: MagCalibration = MagCalibration::from_f64([%a.0, %a.0, %a.0], [%s%6, %s%6, %s%6]);",
-        &[b0 as u32, b1 as u32, b2 as u32, m0, m1, m2],
-        &[n0, n1, n2],
-    )
+    push_str(out, "pub const CALIBRATION: MagCalibration = MagCalibration::from_f64([")?;
+    for (i, b) in cal.bias.into_iter().enumerate() {
+        if i > 0 {
+            push_str(out, ", ")?;
+        }
+        push_i32(out, b)?;
+        push_str(out, ".0")?;
+    }
+    push_str(out, "], [")?;
+    for (i, q16) in cal.scale_q16.into_iter().enumerate() {
+        if i > 0 {
+            push_str(out, ", ")?;
+        }
+        // q16 * 10^6 / 2^16 rounded half away from zero (as math::div_round):
+        // the sign as text, as a magnitude may pass i32::MAX (and |q16| >= 1
+        // gives at least 15 millionths: no "-0")
+        push_fixed_parts(out, q16 < 0, q16_to_micro(q16.unsigned_abs()), 6)?;
+    }
+    push_str(out, "]);")
 }
 
 #[cfg(test)]

@@ -140,53 +140,6 @@ pub fn push_text(out: &mut dyn TextOut, text: &str) -> Result<(), Overflow> {
     Ok(())
 }
 
-/// The slot in a [`put_template`] template, followed by its code.
-pub const SLOT: u8 = b'%';
-
-/// Appends `template` with each slot replaced by the next value of its
-/// kind. A slot is [`SLOT`] (`%`) and a code:
-/// - `0`..=`9`: the next of `nums` as an unsigned value with that many
-///   decimals (`%3` writes 1500 as `1.500`, see [`push_fixed_parts`]);
-/// - `a`..=`j`: the next of `nums` as an `i32`'s bits with 0..=9 decimals
-///   (`%c` writes -1234 as `-12.34`, see [`push_fixed`]);
-/// - `s`: the next of `texts`, as [`push_text`] writes it.
-///
-/// A slot past the last value of its kind, or with another code, writes
-/// nothing; the template's own text is written as [`TextOut::put_ascii`]
-/// writes it. The format lives in the template (flash data), so a call
-/// passes each number as one word: one call per line shape costs a few
-/// bytes of the robot's code per value.
-#[inline(never)]
-pub fn put_template(out: &mut dyn TextOut, template: &str, nums: &[u32], texts: &[&str]) -> Result<(), Overflow> {
-    let (mut nums, mut texts) = (nums.iter(), texts.iter());
-    let mut rest = template.as_bytes();
-    while let Some(i) = rest.iter().position(|&b| b == SLOT) {
-        let (text, tail) = rest.split_at(i); // i < rest.len()
-        out.put_ascii(text)?;
-        let code = tail.get(1).copied().unwrap_or(0);
-        match code {
-            b'0'..=b'9' => {
-                if let Some(&v) = nums.next() {
-                    push_fixed_parts(out, false, v, u32::from(code.wrapping_sub(b'0')))?;
-                }
-            }
-            b'a'..=b'j' => {
-                if let Some(&v) = nums.next() {
-                    push_fixed(out, v as i32, u32::from(code.wrapping_sub(b'a')))?;
-                }
-            }
-            b's' => {
-                if let Some(t) = texts.next() {
-                    push_text(out, t)?;
-                }
-            }
-            _ => {}
-        }
-        rest = tail.get(2..).unwrap_or(&[]);
-    }
-    out.put_ascii(rest)
-}
-
 /// `(v / 10_000, v % 10_000)` for every `u32`, without a division:
 /// `q = floor(v * m / 2^45)` with `m = ceil(2^45 / 10^4) = 0xD1B7_1759` (the
 /// reciprocal GCC and LLVM use). `m = 2^45 / 10^4 + e` with `e < 0.12`, so
@@ -397,4 +350,14 @@ pub fn push_fixed_parts(out: &mut dyn TextOut, negative: bool, magnitude: u32, d
 #[inline(never)]
 pub fn push_fixed(out: &mut dyn TextOut, value: i32, decimals: u32) -> Result<(), Overflow> {
     push_fixed_parts(out, value < 0, value.unsigned_abs(), decimals)
+}
+
+/// Appends an unsigned integer.
+pub fn push_u32(out: &mut dyn TextOut, v: u32) -> Result<(), Overflow> {
+    push_fixed_parts(out, false, v, 0)
+}
+
+/// Appends a signed integer.
+pub fn push_i32(out: &mut dyn TextOut, v: i32) -> Result<(), Overflow> {
+    push_fixed(out, v, 0)
 }

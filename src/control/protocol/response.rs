@@ -3,7 +3,7 @@
 //! telemetry directly.
 
 use super::command::{format_command, q8_to_centi, Command, ParseError};
-use super::number::{push_str, push_text, put_template, TextOut};
+use super::number::{push_fixed, push_fixed_parts, push_i32, push_str, push_text, push_u32, TextOut};
 use super::telemetry::{motion_word, FaultCounters};
 use super::Overflow;
 use crate::model::{Motion, Pose, ServoCmd, Trim};
@@ -92,40 +92,52 @@ pub fn format_status(s: &Status, out: &mut dyn TextOut) -> Result<(), Overflow> 
     // at most MODE_MAX bytes of the mode word (it may be any &str)
     let mode = s.mode.get(..s.mode.len().min(MODE_MAX)).unwrap_or("?");
     let motion = motion_word(s.motion.kind());
-    // signed values as their i32's bits (codes a..d)
-    put_template(
-        out,
-        "# status t_ms=%0 mode=%s motion=%s v_mps=%d w_radps=%d",
-        &[s.t_ms, v as u32, w as u32],
-        &[mode, motion],
-    )?;
+    push_str(out, "# status t_ms=")?;
+    push_u32(out, s.t_ms)?;
+    push_str(out, " mode=")?;
+    push_text(out, mode)?;
+    push_str(out, " motion=")?;
+    push_str(out, motion)?;
+    push_str(out, " v_mps=")?;
+    push_fixed(out, v, 3)?;
+    push_str(out, " w_radps=")?;
+    push_fixed(out, w, 3)?;
     if let Some(ms) = s.remaining_ms {
-        put_template(out, " left_ms=%0", &[ms], &[])?;
+        push_str(out, " left_ms=")?;
+        push_u32(out, ms)?;
     }
+    push_str(out, " x_mm=")?;
+    push_i32(out, s.pose.x.to_length().to_mm())?;
+    push_str(out, " y_mm=")?;
+    push_i32(out, s.pose.y.to_length().to_mm())?;
+    push_str(out, " heading_deg=")?;
+    push_fixed_parts(out, false, s.pose.theta.to_millidegrees(), 3)?;
+    push_str(out, " left_cmd=")?;
+    push_fixed_parts(out, false, s.left_cmd.to_centi(), 2)?;
+    push_str(out, " right_cmd=")?;
+    push_fixed_parts(out, false, s.right_cmd.to_centi(), 2)?;
+    push_str(out, " trim_left=")?;
+    push_fixed(out, q8_to_centi(i32::from(s.left_trim.0)), 2)?;
+    push_str(out, " trim_right=")?;
+    push_fixed(out, q8_to_centi(i32::from(s.right_trim.0)), 2)?;
+    push_str(out, " rate_hz=")?;
+    push_u32(out, u32::from(s.rate_hz))?;
     let up = |ok: bool| if ok { "ok" } else { "down" };
+    push_str(out, " front=")?;
+    push_str(out, up(s.front_ok))?;
+    push_str(out, " right=")?;
+    push_str(out, up(s.right_ok))?;
+    push_str(out, " compass=")?;
+    push_str(out, up(s.compass_ok))?;
+    push_str(out, " faults=")?;
     let f = &s.faults;
-    put_template(
-        out,
-        " x_mm=%a y_mm=%a heading_deg=%3 left_cmd=%2 right_cmd=%2 trim_left=%c trim_right=%c rate_hz=%0 \
-front=%s right=%s compass=%s faults=%0/%0/%0/%0/%0/%0",
-        &[
-            s.pose.x.to_length().to_mm() as u32,
-            s.pose.y.to_length().to_mm() as u32,
-            s.pose.theta.to_millidegrees(),
-            s.left_cmd.to_centi(),
-            s.right_cmd.to_centi(),
-            q8_to_centi(i32::from(s.left_trim.0)) as u32,
-            q8_to_centi(i32::from(s.right_trim.0)) as u32,
-            u32::from(s.rate_hz),
-            f.bus,
-            f.timeout,
-            f.missing,
-            f.bad_sample,
-            f.rejected_outliers,
-            f.overruns,
-        ],
-        &[up(s.front_ok), up(s.right_ok), up(s.compass_ok)],
-    )
+    for (i, n) in [f.bus, f.timeout, f.missing, f.bad_sample, f.rejected_outliers, f.overruns].into_iter().enumerate() {
+        if i > 0 {
+            push_str(out, "/")?;
+        }
+        push_u32(out, n)?;
+    }
+    Ok(())
 }
 
 /// The `help` answer, one line each (ranges as in `config::serial`; a test
