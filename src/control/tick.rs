@@ -77,11 +77,11 @@ pub trait LineSink {
 /// The control loop, generic over the drivers (see the module docs).
 #[repr(C)]
 pub struct Controller<F, R, C, S> {
-    // Declared order (repr(C)), small and hot fields first: the lx106's
-    // loads and stores take an offset of at most 255 bytes for a u8, 510
-    // for a u16 and 1020 for a u32, and a field further out costs an
-    // address computation at every access. The drivers and the line
-    // buffers go last. (-188 B of code and -21 instructions per tick.)
+    // tick bar: declared order (repr(C)), small and hot fields first: the
+    // lx106's loads and stores take an offset of at most 255 bytes for a
+    // u8, 510 for a u16 and 1020 for a u32, and a field further out costs
+    // an address computation at every access. The drivers and the line
+    // buffers go last.
     /// A valid command arrived since the last tick.
     command_seen: bool,
     header_due: bool,
@@ -202,10 +202,6 @@ where
 
     /// Takes one received serial byte; a finished line is parsed and
     /// handled at once (its answer goes to `sink`).
-    // Out of line, as `tick` and `handle`: the firmware's main loop calls
-    // each once, and inlined into its frame every field access paid a long
-    // stack offset (BENCHMARKS.md, "Fourth pass").
-    #[inline(never)]
     pub fn feed(&mut self, byte: u8, sink: &mut impl LineSink) {
         match self.input.push(byte) {
             None => {}
@@ -226,7 +222,6 @@ where
     }
 
     /// Carries out one parsed command (answers `# ok <command>` first).
-    #[inline(never)]
     pub fn handle(&mut self, cmd: Command, sink: &mut impl LineSink) {
         self.command_seen = true;
         if matches!(self.mode, Mode::Calibrate { .. })
@@ -324,6 +319,7 @@ where
 
     /// Runs one loop iteration at `now_us` (a free-running microsecond
     /// counter that may wrap; call it every [`TICK_US`]).
+    // tick bar: in a frame of its own, its field accesses take short offsets
     #[inline(never)]
     pub fn tick(&mut self, now_us: u32, sink: &mut impl LineSink) {
         // 1. time
@@ -372,7 +368,6 @@ where
     /// Integrates `motion` over `dt_us` in steps of at most [`Dt::MAX`]
     /// (a late tick of up to a second is integrated in full; beyond that
     /// the robot has stopped by the deadman anyway).
-    #[inline(never)]
     fn advance(&mut self, motion: Motion, dt_us: u32) {
         const MAX_STEPS: u32 = 16; // 16 * 65.5 ms > 1 s
         let mut left = dt_us;
@@ -408,9 +403,8 @@ where
                     if let Some(cal) = self.calibrator.as_mut() {
                         self.calibration_done = cal.feed(s.raw) == CalStatus::Done;
                     }
-                    // the field member by member: at opt-level "z" a copy of
-                    // the 12-byte `MagField` is a `memcpy` call (~80
-                    // instructions on the lx106; BENCHMARKS.md, "Fifth pass")
+                    // tick bar: the field member by member (at opt-level
+                    // "z" a copy of the 12-byte `MagField` is a `memcpy` call)
                     let f = s.field;
                     let kept = self.last_compass.insert(CompassSample {
                         raw: s.raw,
@@ -479,7 +473,6 @@ where
 
     /// Ends the running sweep with its result (its samples are in, or its
     /// time is up).
-    #[inline(always)]
     fn finish_sweep(&mut self, sink: &mut impl LineSink) {
         let result = self.calibrator.as_ref().map(MagCalibrator::result);
         self.end_calibration(result, sink);
@@ -514,9 +507,6 @@ where
     }
 
     /// The servo commands and motion of the current mode.
-    // (out of line, as `Mode::timer_mut`: one copy is 176 B less code than
-    // the inlined ones, at no cost to the bar's tick)
-    #[inline(never)]
     fn current_drive(&self) -> Drive {
         match self.mode {
             Mode::Idle => self.model.stop(),

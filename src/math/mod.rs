@@ -34,7 +34,7 @@ pub use mul::{mul_hi, mul_hi_u, mul_hi_u32, mul_q30, mul_q30_unsat, mul_u31, mul
 pub use recip::reciprocal;
 pub use shift::{normalize, shift};
 pub use sqrt::{isqrt, isqrt64};
-pub use trig::{atan2, sin_cos, sin_cos_inline};
+pub use trig::{atan2, sin_cos};
 
 /// Rounds an `f64` to the nearest `i64` in a `const fn` (`f64::round` is not
 /// const on Rust 1.82).
@@ -47,7 +47,6 @@ pub const fn round_f64(x: f64) -> i64 {
 }
 
 /// Saturating `i64 -> i32` (const).
-#[inline(never)]
 pub const fn sat_i32(x: i64) -> i32 {
     if x > i32::MAX as i64 {
         i32::MAX
@@ -68,6 +67,8 @@ pub const fn sat_i32(x: i64) -> i32 {
 /// result): nothing on the state update's or the estimator's path divides.
 /// Every division in the robot's code is here, in [`div_i64`] (the ROM's
 /// `__divdi3`) or in [`div_round`] (one division of magnitudes).
+// a call: inlined, a division of small constants would become a 32-bit
+// `__udivsi3`, which the ROM linking leaves out
 #[inline(never)]
 pub const fn div_u64(n: u64, d: u64) -> Option<u64> {
     n.checked_div(d)
@@ -214,7 +215,6 @@ impl Coord {
         Coord((l.0 as i64) << 16)
     }
     /// The coordinate as a [`Length`], rounded and saturated to +-32.7 m.
-    #[inline(never)]
     pub fn to_length(self) -> Length {
         let bits = self.0.saturating_add(1 << 15) >> 16;
         Length(sat_i32(bits))
@@ -227,6 +227,7 @@ impl Coord {
     /// 2147 km of travel in one direction (days of driving at the robot's top
     /// speed), and a saturating i64 add costs 20 lx106 instructions where
     /// this costs 4.
+    // step bar
     #[inline(always)]
     pub fn add_q22(self, step: i32) -> Coord {
         Coord(self.0.wrapping_add(i64::from(step) << 10))
@@ -289,6 +290,7 @@ impl Speed {
     /// Distance covered in `dt`, in units of 2^-24 mm (|result| < 2^31: at
     /// most 65.5 mm, `MAX` over `Dt::MAX`).
     /// Two 16x16 products: `v = vh * 2^16 + vl`, `v dt / 2^8 = vh dt 2^8 + vl dt / 2^8`.
+    // step bar
     #[inline(always)]
     pub fn distance_q24(self, dt: Dt) -> i32 {
         let dt = u32::from(dt.0);
@@ -370,6 +372,7 @@ impl TurnRate {
     /// Rotation over `dt` as (whole angle LSBs, 2^-16 fraction). Exact:
     /// `w = wh 2^16 + wl`, `w dt = wh dt 2^16 + wl dt`, and the angle is
     /// modulo one turn, so the wrapping multiply is the right answer.
+    // step bar
     #[inline(always)]
     pub fn rotation(self, dt: Dt) -> (Angle, u16) {
         let dt = u32::from(dt.0);

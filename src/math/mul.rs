@@ -42,8 +42,6 @@ pub fn mul_hi_u32(a: u32, b: u32) -> u32 {
 /// three more and a carry. About 25 lx106 instructions, against ~55 for
 /// `i64::from(a) * i64::from(b)` (a `__muldi3` call) and ~245 for an
 /// overflow-checked i64 product.
-// tick bar: out of line, five calls in a correction
-#[inline(never)]
 pub fn mul_wide(a: i32, b: i32) -> i64 {
     let (ah, al) = (a >> 16, a & 0xFFFF);
     let (bh, bl) = (b >> 16, b & 0xFFFF);

@@ -3,8 +3,6 @@
 
 /// `(x << n, n)` with `x << n` in `[2^31, 2^32)`, for `x > 0` (the lx106 has
 /// no NSAU: a five-step binary search, ~15 instructions).
-// tick bar: out of line, three calls in a correction
-#[inline(never)]
 pub fn normalize(x: u32) -> (u32, u32) {
     let (mut x, mut n) = (x, 0u32);
     if x < 1 << 16 {

@@ -107,6 +107,7 @@ const THREE_QUARTERS: u32 = 3 << 30;
 /// [`Coord::to_length`] (rounded to nearest, saturated to +-32.7 m) without
 /// the 64-bit saturating add: `(c + 2^15) >> 16` is `(c >> 16)` plus bit 15
 /// of `c`, which cannot overflow (about 12 lx106 instructions against ~50).
+// tick bar
 #[inline(always)]
 fn coord_length(c: Coord) -> Length {
     let v = (c.0 >> 16) + ((c.0 >> 15) & 1); // |c >> 16| <= 2^47

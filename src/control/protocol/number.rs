@@ -31,18 +31,13 @@ pub trait TextOut {
     }
 }
 
-// Never inlined: one copy of each per buffer size rather than one per call
-// site (the formatters' calls are devirtualised where the buffer is known).
 impl<const N: usize> TextOut for String<N> {
-    #[inline(never)]
     fn put_str(&mut self, s: &str) -> Result<(), Overflow> {
         self.push_str(s).map_err(|_| Overflow)
     }
-    #[inline(never)]
     fn put_byte(&mut self, b: u8) -> Result<(), Overflow> {
         self.push(if b.is_ascii() { char::from(b) } else { '?' }).map_err(|_| Overflow)
     }
-    #[inline(never)]
     fn put_ascii(&mut self, bytes: &[u8]) -> Result<(), Overflow> {
         for &b in bytes {
             self.push(if b.is_ascii() { char::from(b) } else { '?' }).map_err(|_| Overflow)?;
@@ -229,7 +224,6 @@ impl Cursor {
     }
 
     /// Stores `b` at `i` (masked: always in the buffer).
-    #[inline(always)]
     fn set(&mut self, i: usize, b: u8) {
         if let Some(slot) = self.buf.get_mut(i & (CURSOR - 1)) {
             *slot = b;
@@ -255,7 +249,6 @@ impl Cursor {
     /// counted first, then the text is written from its last byte, four
     /// digits per reciprocal multiply by 10^4 and one per multiply by the
     /// reciprocal of 10 (no division).
-    #[inline(never)]
     pub(super) fn number(&mut self, negative: bool, magnitude: u32, decimals: u32) {
         let decimals = decimals.min(9) as usize;
         let minus = negative && magnitude != 0;
@@ -298,7 +291,6 @@ impl Cursor {
 
     /// Writes digit `d` (< 10) in front of `p`, after the point if `p` has
     /// reached it.
-    #[inline(always)]
     fn digit(&mut self, p: &mut usize, point: usize, d: u32) {
         *p = p.wrapping_sub(1);
         if *p == point {
@@ -339,7 +331,6 @@ impl Cursor {
 /// digits after the point (none and no point when `decimals` is 0), with a
 /// `-` in front when `negative` and the magnitude is not zero, in one
 /// [`TextOut::put_ascii`]. `decimals` above 9 is treated as 9.
-#[inline(never)]
 pub fn push_fixed_parts(out: &mut dyn TextOut, negative: bool, magnitude: u32, decimals: u32) -> Result<(), Overflow> {
     let mut text = Cursor::new();
     text.number(negative, magnitude, decimals);
@@ -347,7 +338,6 @@ pub fn push_fixed_parts(out: &mut dyn TextOut, negative: bool, magnitude: u32, d
 }
 
 /// Appends a signed scaled value as a decimal (see [`push_fixed_parts`]).
-#[inline(never)]
 pub fn push_fixed(out: &mut dyn TextOut, value: i32, decimals: u32) -> Result<(), Overflow> {
     push_fixed_parts(out, value < 0, value.unsigned_abs(), decimals)
 }

@@ -84,7 +84,6 @@ pub struct Status {
 /// heading_deg=90.000 left_cmd=107.00 right_cmd=61.00 trim_left=0.00 trim_right=-1.50 rate_hz=10
 /// front=ok right=ok compass=down faults=0/0/0/0/0/0` (one line; `left_ms` only for timed
 /// commands; faults in telemetry column order). Fits in [`super::MAX_OUT_LINE`].
-#[inline(never)]
 pub fn format_status(s: &Status, out: &mut dyn TextOut) -> Result<(), Overflow> {
     let (v, w) = match s.motion {
         Motion::Stop => (0, 0),

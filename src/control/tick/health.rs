@@ -78,7 +78,7 @@ where
     }
 
     /// Keeps what a lidar's poll gave (`which` is `Front` or `Right`).
-    /// Inlined: a call costs the tick bar ~100 instructions at opt-level "z".
+    // tick bar: a call here costs ~100 instructions
     #[inline(always)]
     pub(super) fn lidar_polled(&mut self, which: Which, polled: nb::Result<LidarSample, SensorError>, now: Stamp) {
         let s = match polled {

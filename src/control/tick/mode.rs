@@ -34,7 +34,6 @@ impl Mode {
             Mode::Drive { timer, .. } | Mode::Servo { timer, .. } | Mode::Calibrate { timer, .. } => Some(timer),
         }
     }
-    #[inline(never)]
     pub(super) fn timer_mut(&mut self) -> Option<&mut Timer> {
         match self {
             Mode::Idle => None,

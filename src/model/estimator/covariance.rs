@@ -44,7 +44,7 @@ impl Estimator {
         p.xx = p.xx.max(P_MIN);
         p.yy = p.yy.max(P_MIN);
         p.tt = p.tt.max(P_MIN);
-        // (three calls, not a loop over an array: at opt-level "z" the
+        // (tick bar: three calls, not a loop over an array; at opt-level "z" the
         // array's iterator is a call per element)
         let repairs = bound_correlation(&mut p.xy, p.xx, p.yy)
             + bound_correlation(&mut p.xt, p.xx, p.tt)
@@ -55,6 +55,7 @@ impl Estimator {
 
 /// Keeps `|P_ij| <= sqrt(P_ii P_jj)` (`0 < P_ii, P_jj <= 2^30`, capped and
 /// floored by [`Estimator::condition`]); 1 if it had to change `P_ij`.
+// tick bar: the quick test inline, the rare exact one out of line
 #[inline(always)]
 fn bound_correlation(pij: &mut i32, pii: i32, pjj: i32) -> u32 {
     // |P_ij| <= min(P_ii, P_jj) implies P_ij^2 <= P_ii P_jj: the exact test
@@ -67,6 +68,7 @@ fn bound_correlation(pij: &mut i32, pii: i32, pjj: i32) -> u32 {
 
 /// [`bound_correlation`] past its quick test, out of line (a correlation
 /// above `min(P_ii, P_jj) / sqrt(P_ii P_jj)`: rare in steady state).
+// tick bar: see `bound_correlation`
 #[inline(never)]
 fn bound_correlation_exact(pij: &mut i32, pii: i32, pjj: i32) -> u32 {
     let a = pij.unsigned_abs();
@@ -85,9 +87,6 @@ fn bound_correlation_exact(pij: &mut i32, pii: i32, pjj: i32) -> u32 {
 
 /// One covariance entry's part of a correction, `P_ij -= mul_hi(t_i,
 /// beta_j) 2^e` (saturating, [`shift`]; see [`Estimator::correct`]).
-/// Out of line: one copy for the six entries is 220 B less code for ~3
-/// instructions each.
-#[inline(never)]
 pub(super) fn remove(pij: &mut i32, ti: i32, bj: i32, e: i32) {
     *pij = pij.saturating_sub(shift(mul_hi(ti, bj), e));
 }
@@ -96,8 +95,7 @@ pub(super) fn remove(pij: &mut i32, ti: i32, bj: i32, e: i32) {
 /// `|g| <= 1`, `v` small: see [`Estimator::predict`]) and returns
 /// `(v g1, v g2)`, the heading column's share of a turn's noise. Both
 /// motions' noise has this shape (a straight step's `g` is the heading's
-/// `(cos, sin)`): one out-of-line copy for the two.
-#[inline(never)]
+/// `(cos, sin)`).
 pub(super) fn add_noise(p: &mut Covariance, v: i32, g1: i32, g2: i32) -> (i32, i32) {
     let (v1, v2) = (mul_q30_unsat(v, g1), mul_q30_unsat(v, g2));
     p.xx = p.xx.saturating_add(mul_q30_unsat(v1, g1));
@@ -110,7 +108,6 @@ pub(super) fn add_noise(p: &mut Covariance, v: i32, g1: i32, g2: i32) -> (i32, i
 /// i.e. below 1/2). With `|P_ij| <= 2^30` (conditioned): `u` below 1.5 2^30
 /// fits i32; the other sums can pass 2^31 only for a P near its cap, and
 /// saturate.
-#[inline(never)]
 pub(super) fn propagate(p: &mut Covariance, f1: i32, f2: i32) {
     // new P_xt = P_xt + f1 P_tt, new P_yt = P_yt + f2 P_tt
     let u1 = p.xt + mul_q30_unsat(p.tt, f1);

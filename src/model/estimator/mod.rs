@@ -281,7 +281,6 @@ impl Estimator {
     /// coordinate's high word only (its floor in mm, Coord being Q32): two
     /// 32-bit compares per axis, the 64-bit stores only when out of bounds.
     /// (For an arena of negative size the upper bound wins: no panic.)
-    #[inline(never)]
     fn keep_in_arena(&mut self) {
         let p = &mut self.pose;
         clamp_mm(&mut p.x, self.low_mm, self.high_x_mm);
@@ -317,6 +316,7 @@ impl Estimator {
 
 /// [`Estimator::keep_in_arena`] for one coordinate: into `[low, high]` mm
 /// by its high word (`|c| < 2^63`: it fits).
+// tick bar
 #[inline(always)]
 fn clamp_mm(c: &mut Coord, low: i32, high: i32) {
     let mm = (c.0 >> 32) as i32;

@@ -31,9 +31,6 @@ struct Row {
 impl Estimator {
     /// Corrects the pose with a lidar's model output (distance from the
     /// reference point along the beam, see [`crate::model::lidar`]).
-    // out of line: inlined into the tick it was 256 B more code for no
-    // fewer instructions
-    #[inline(never)]
     pub fn update_lidar(&mut self, which: LidarId, distance: crate::math::Length) -> Update {
         let mount = which.mount();
         // Refresh the pose's sin/cos cache in place (a no-op when it is
@@ -96,8 +93,8 @@ impl Estimator {
 
     /// A lidar reading failed the gate: counted into the lidar's run of
     /// outliers, and at [`cfg::REACQUIRE_AFTER`] the position is taken as
-    /// lost (see the module docs). Out of line: the accepted path stays as
-    /// it was.
+    /// lost (see the module docs).
+    // tick bar: the accepted path carries none of this
     #[cold]
     #[inline(never)]
     fn lidar_outlier(&mut self, which: LidarId, row: Row, nu: crate::math::Length, r: i32, beam: &Beam) -> Update {
@@ -125,7 +122,8 @@ impl Estimator {
         self.correct_ungated(row, nu.0, r)
     }
 
-    /// [`Estimator::correct`] without the gate, out of line (re-acquisition only).
+    /// [`Estimator::correct`] without the gate (re-acquisition only).
+    // tick bar: the accepted path carries none of this
     #[cold]
     #[inline(never)]
     fn correct_ungated(&mut self, row: Row, nu: i32, r: i32) -> Update {
@@ -135,6 +133,7 @@ impl Estimator {
     /// A compass reading failed the gate: counted into the compass's run of
     /// outliers, and at [`cfg::REACQUIRE_AFTER`] the heading is taken as
     /// lost: its variance to the cap, uncorrelated, and the reading used.
+    // tick bar: the accepted path carries none of this
     #[cold]
     #[inline(never)]
     fn heading_outlier(&mut self, row: Row, nu: i32) -> Update {
@@ -170,10 +169,7 @@ impl Estimator {
     /// The scalar Kalman correction for innovation `nu` (Q16 mm), row `h`,
     /// noise `r` (Q14 mm^2, > 0), gated unless re-acquiring. All 32-bit but
     /// the state update's three products (see the module docs, "Arithmetic
-    /// of a correction"). One copy for the three callers (gated lidar and
-    /// compass, ungated re-acquisition): the call costs a few instructions,
-    /// three inlined copies cost kilobytes of flash.
-    #[inline(never)]
+    /// of a correction").
     fn correct(&mut self, h: Row, nu: i32, r: i32, gate: Gate) -> Update {
         // b = P H^T and H P H^T, scaled by 2^-k (Q(14 - k) mm^2).
         let (b, hph, k) = project(&self.p, h);
@@ -199,7 +195,7 @@ impl Estimator {
         // |b| < 2^27: sb >= 3
         let sb = normalize(mb).1 - 2;
         // t = beta / S 2^(30 - ns) (|t| < 2^29), rounded toward zero.
-        // (element by element, not `map`: at opt-level "z" a closure per
+        // (tick bar: element by element, not `map`: at opt-level "z" a closure per
         // element is a call, and this is the tick's hottest path)
         let t = [over_s(b[0], sb, y), over_s(b[1], sb, y), over_s(b[2], sb, y)];
         // K = b / S = t 2^(ns - sb - 30); in Q21: t 2^(ns - sb - 9). For a
@@ -246,6 +242,7 @@ impl Estimator {
 
 /// `beta / S` for one entry of `b`: `|b| 2^sb` times `y` (1/S, see
 /// [`reciprocal`]), high word, with `b`'s sign (rounded toward zero).
+// tick bar (as the other inline attributes below)
 #[inline(always)]
 fn over_s(bi: i32, sb: u32, y: u32) -> i32 {
     let m = mul_hi_u(bi.unsigned_abs() << sb, y) as i32;
@@ -294,7 +291,7 @@ fn project(p: &Covariance, h: Row) -> ([i32; 3], i32, u32) {
             let k = scale_shift(mag(&col_t) | mag(&col_a));
             // |P >> k| < 2^23, so << 8 < 2^31; |theta| < 2^19, << 8 < 2^27:
             // mul_hi gives P theta / 2^16, below 2^26 (+ 3 LSB of rounding).
-            // |b| < 2^26 + 2^23 < 2^27 (element by element: at opt-level "z"
+            // |b| < 2^26 + 2^23 < 2^27 (tick bar: element by element; at opt-level "z"
             // an iterator over the columns is a call per element)
             let th8 = h.theta << 8;
             let b = [
