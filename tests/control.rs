@@ -615,7 +615,7 @@ fn calibration_turns_in_place_applies_and_prints_the_result() {
     let cal = ctl.compass().calibration;
     assert_eq!(&cal.bias[..2], &[79, 35]);
     // the line is the driver's ConfigLine, written without core::fmt
-    assert_eq!(lines[1], format!("# {}", paperbot::driver::calibration::ConfigLine(&cal)));
+    assert_eq!(lines[1], format!("# {}", paperbot::model::compass::ConfigLine(&cal)));
     ctl.tick(3_000_000, &mut out);
     assert_eq!(servos(&mut ctl), neutral());
 }

@@ -57,10 +57,9 @@ use crate::control::protocol::{
     format_response, format_status, format_telemetry, telemetry_header, Command, FaultCounters, LineBuffer, OutLine,
     ParseError, Response, Side, Telemetry, HELP, MAX_OUT_LINE,
 };
-use crate::driver::calibration::{CalStatus, CalibrationError, MagCalibrator};
 use crate::driver::{CompassSample, HeadingSensor, LidarSample, MagCalibrate, Servos};
 use crate::math::{div_u64, Angle, Coord, Dt, Length, TurnRate};
-use crate::model::compass::MagCalibration;
+use crate::model::compass::{CalStatus, CalibrationError, MagCalibration, MagCalibrator};
 use crate::model::estimator::{Estimator, Update};
 use crate::model::measurement::{Arena, LidarId};
 use crate::model::{advance, ActuatorModel, Drive, Motion, Pose};

@@ -6,8 +6,7 @@ use super::command::{format_command, q8_to_centi, Command, ParseError};
 use super::number::{push_fixed, push_fixed_parts, push_i32, push_str, push_text, push_u32, TextOut};
 use super::telemetry::{motion_word, FaultCounters};
 use super::Overflow;
-use crate::driver::calibration::CalibrationError;
-use crate::model::compass::MagCalibration;
+use crate::model::compass::{CalibrationError, MagCalibration};
 use crate::model::{Motion, Pose, ServoCmd, Trim};
 
 /// Prefix of an accepted command's echo.
@@ -215,7 +214,7 @@ pub fn format_calibration_report(
 }
 
 /// The `CALIBRATION` line of `config::compass` for `cal`, ready to paste
-/// (the same text as `driver::calibration::ConfigLine`, written without
+/// (the same text as `model::compass::ConfigLine`, written without
 /// `core::fmt`): biases as integers, scales with six decimals.
 pub fn format_config_line(out: &mut dyn TextOut, cal: &MagCalibration) -> Result<(), Overflow> {
     push_str(out, "pub const CALIBRATION: MagCalibration = MagCalibration::from_f64([")?;
