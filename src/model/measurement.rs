@@ -40,8 +40,8 @@
 //! heading clockwise from north, in the same frame ([`expected_heading`]).
 
 use crate::config;
-use crate::config::geometry::LidarMount;
 use crate::math::{mul_hi, mul_q30, sin_cos, Angle, Coord, Length};
+use crate::model::lidar::LidarMount;
 use crate::model::state::Pose;
 
 /// A rectangular arena with its origin at a corner (see the module docs).

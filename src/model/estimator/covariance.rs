@@ -7,7 +7,7 @@ use super::Estimator;
 use crate::math::{isqrt64, mul_hi, mul_q30_unsat, mul_u31, shift};
 
 /// The error covariance, symmetric, over `(dx, dy, L dtheta)` with
-/// `L` = [`HEADING_LEVER_MM`]: every entry in Q14 mm^2 (2^-14 mm^2).
+/// `L` = [`super::HEADING_LEVER_MM`]: every entry in Q14 mm^2 (2^-14 mm^2).
 /// Invariants after every step: `MIN <= P_ii <= MAX` and
 /// `P_ij^2 <= P_ii P_jj`, so every entry is at most 2^30 in magnitude.
 #[derive(Clone, Copy, PartialEq, Eq, Hash, Debug, Default)]
