@@ -3,7 +3,6 @@
 #
 #   bash lx106/size.sh                  # build the probes, print the figures
 #   bash lx106/size.sh --no-build       # as run.sh step 5: the probes are built
-#   bash lx106/size.sh --bar BYTES      # exit 1 if the core's .text >= BYTES
 #   SIZE_ROWS=40 bash lx106/size.sh     # more rows in the breakdowns
 #
 # Three release binaries, each linked alone from the same minimal runtime:
@@ -22,11 +21,9 @@
 set -euo pipefail
 cd "$(dirname "$0")"
 build=1
-bar=""
 while (($#)); do
   case "$1" in
     --no-build) build=0 ;;
-    --bar) bar="$2"; shift ;;
     *) echo "size.sh: unknown argument $1" >&2; exit 2 ;;
   esac
   shift
@@ -66,14 +63,4 @@ if command -v python3 >/dev/null; then
   python3 tools/size_by_file.py "$OUT/core-probe" "$OUT/size-base" "${SIZE_ROWS:-25}" | sed 's/^/   /'
 else
   echo "   (python3 missing: no breakdown)"
-fi
-
-if [[ -n $bar ]]; then
-  text=$(d core-probe .text)
-  if ((text < bar)); then
-    echo "test bar::core_text: $text < $bar bytes ... ok"
-  else
-    echo "test bar::core_text: $text < $bar bytes ... FAILED"
-    exit 1
-  fi
 fi

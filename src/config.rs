@@ -13,6 +13,7 @@ use crate::math::{Angle, Length};
 /// Robot geometry.
 pub mod geometry {
     use super::*;
+    use crate::model::lidar::LidarMount;
 
     /// Wheel radius: 20 mm (report 3.2 uses r = 0.02 m; its "200 mm
     /// diameter" is a typo).
@@ -25,16 +26,6 @@ pub mod geometry {
     pub const ROTATION_TO_REFERENCE: Length = Length::from_mm_f64(56.0);
     /// The paper skid drags about 70 mm behind the axle (report 1).
     pub const SKID_BEHIND_AXLE: Length = Length::from_mm_f64(70.0);
-
-    /// Where a lidar sits relative to the car's reference point, in the car's
-    /// frame (mm forward, mm right), and which way it looks.
-    #[derive(Clone, Copy, PartialEq, Eq, Debug)]
-    pub struct LidarMount {
-        pub forward: Length,
-        pub right: Length,
-        /// Beam direction relative to the heading (clockwise).
-        pub direction: Angle,
-    }
 
     /// Front lidar: 50 mm behind the reference point, looking forward
     /// (PAPERBOT, from the team's later estimator; lateral offset not

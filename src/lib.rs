@@ -1,11 +1,23 @@
 //! Firmware for the ESP8266 paperbot: a paper-chassis robot with two FS90R
 //! continuous servos, two VL53L0X lidars and an MPU9250 magnetometer.
 //!
-//! Layers, each depending only on the ones above it:
-//! [`config`] (every tuned number), [`math`] (fixed-point types),
-//! [`model`] (the lab report's models and the state update), `driver` (the
-//! chips through embedded-hal), `control` (the tick and the serial
-//! protocol), and the edges: `board` (ESP8266) and `sim` (host).
+//! # Layers
+//! Dependencies point one way, each layer using only those before it:
+//!
+//! math -> model -> driver -> control -> board / sim / host / bin
+//!
+//! - [`math`]: fixed-point types and arithmetic, no knowledge of robots;
+//! - [`model`]: the lab report's models, the state update, the estimator,
+//!   the compass calibration;
+//! - [`driver`]: the chips through embedded-hal traits (it defines what it
+//!   needs from a board, e.g. `driver::servo::PulseOutput`);
+//! - [`control`]: the tick and the serial protocol;
+//! - the edges, which never use each other: `board` (ESP8266), `sim`
+//!   (host simulator), `host` (host tools), and the firmware binary.
+//!
+//! [`config`] holds every tuned number: any layer may use it, and it only
+//! instantiates `math` and `model` types. `tests/layers.rs` checks every
+//! `crate::` path in `src/` against this rule.
 //!
 //! Frame: x to north, y to east, heading clockwise from north, lengths in mm.
 #![no_std]

@@ -3,7 +3,7 @@
 //! back; incomplete sweeps are rejected; the config line round-trips.
 
 use paperbot::config;
-use paperbot::driver::calibration::{CalStatus, CalibrationError, ConfigLine, MagCalibrator};
+use paperbot::model::compass::{CalStatus, CalibrationError, ConfigLine, MagCalibrator};
 use paperbot::model::compass::{MagCalibration, MagCounts};
 
 /// Half-ranges (counts) that the report's scales imply for a 150-count

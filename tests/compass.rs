@@ -3,79 +3,28 @@
 //! directly), a read with the ASA applied in integers, data-ready, the
 //! overflow flag, and every error path. Every mock ends with `.done()`.
 
-use embedded_hal::i2c::{ErrorKind, NoAcknowledgeSource};
-use embedded_hal_mock::eh1::delay::{CheckedDelay, Transaction as DelayT};
+mod common;
+
+use common::i2c::{retried, NACK};
+use common::mpu9250::*;
+use embedded_hal::i2c::ErrorKind;
+use embedded_hal_mock::eh1::delay::CheckedDelay;
 use embedded_hal_mock::eh1::i2c::{Mock as I2cMock, Transaction as I2cT};
 use paperbot::config;
 use paperbot::driver::compass::Compass;
 use paperbot::driver::{HeadingSensor, MagCalibrate, SensorError};
 use paperbot::model::compass::{apply_asa, MagCounts};
 
-const MPU: u8 = 0x68;
-const AK: u8 = 0x0C;
-const NACK: ErrorKind = ErrorKind::NoAcknowledge(NoAcknowledgeSource::Address);
-
-/// A failing transaction as the driver sends it: once, then once per retry
-/// (`driver::bus::Retry`, `config::i2c::TRANSACTION_RETRIES`).
-fn retried(t: I2cT) -> Vec<I2cT> {
-    vec![t; usize::from(paperbot::config::i2c::TRANSACTION_RETRIES) + 1]
-}
-/// ASA below 128 on x: the mpu9250 crate's `asa - 128` on a u8 would panic.
-const ASA: [u8; 3] = [0x40, 0xB0, 0xFF];
-
-fn bring_up_script(asa: [u8; 3]) -> Vec<I2cT> {
-    vec![
-        I2cT::write_read(MPU, vec![0x75], vec![0x71]), // WHO_AM_I: MPU9250
-        I2cT::write(MPU, vec![0x6B, 0x80]),            // PWR_MGMT_1: reset
-        I2cT::write(MPU, vec![0x6B, 0x01]),            // clock auto
-        I2cT::write(MPU, vec![0x6C, 0x3F]),            // PWR_MGMT_2: accel, gyro off
-        I2cT::write(MPU, vec![0x6A, 0x00]),            // USER_CTRL: I2C master off
-        I2cT::write(MPU, vec![0x37, 0x02]),            // INT_PIN_CFG: bypass
-        I2cT::write_read(AK, vec![0x00], vec![0x48]),  // WIA
-        I2cT::write(AK, vec![0x0A, 0x00]),             // power down
-        I2cT::write(AK, vec![0x0A, 0x0F]),             // fuse ROM
-        I2cT::write_read(AK, vec![0x10], asa.to_vec()),
-        I2cT::write_read(AK, vec![0x10], asa.to_vec()),
-        I2cT::write(AK, vec![0x0A, 0x00]), // power down
-        I2cT::write(AK, vec![0x0A, 0x16]), // continuous 100 Hz, 16 bit
-    ]
-}
-
-fn waits() -> Vec<DelayT> {
-    let mode = DelayT::delay_us(config::compass::MODE_CHANGE_US);
-    vec![DelayT::delay_us(config::compass::MPU_RESET_TIME_US), mode.clone(), mode.clone(), mode.clone(), mode]
-}
-
-fn read_script(st1: u8, raw: [i16; 3], st2: u8) -> Vec<I2cT> {
-    let mut data: Vec<u8> = raw.iter().flat_map(|v| v.to_le_bytes()).collect();
-    data.push(st2);
-    vec![I2cT::write_read(AK, vec![0x02], vec![st1]), I2cT::write_read(AK, vec![0x03], data)]
-}
-
-fn running(then: &[I2cT]) -> Compass<I2cMock, CheckedDelay> {
-    let i2c = I2cMock::new(&[bring_up_script(ASA), then.to_vec()].concat());
-    let mut c = Compass::with_config(i2c, CheckedDelay::new(&waits()));
-    c.reinit().unwrap();
-    assert_eq!(c.asa(), ASA);
-    c
-}
-
-fn finish(c: Compass<I2cMock, CheckedDelay>) {
-    let (mut i2c, mut delay) = c.release();
-    i2c.done();
-    delay.done();
-}
-
 #[test]
 fn bring_up_is_the_exact_sequence() {
-    finish(running(&[]));
+    done(new_compass(&[]));
 }
 
 #[test]
 fn a_read_applies_asa_calibration_axes_and_declination_in_integers() {
     let raw = [1000, -400, 300];
-    let c_script = read_script(0x01, raw, 0x10);
-    let mut c = running(&c_script);
+    let c_script = read_script(DRDY, raw, BITM);
+    let mut c = new_compass(&c_script);
     let s = c.poll().unwrap();
     assert_eq!(s.raw, MagCounts { x: 1000, y: -400, z: 300 });
     // ASA by hand: raw * (asa + 128) / 256.
@@ -92,24 +41,25 @@ fn a_read_applies_asa_calibration_axes_and_declination_in_integers() {
         ((-f[1]).atan2(f[0]).to_degrees() + config::compass::DECLINATION.to_radians_f64().to_degrees() + 360.0) % 360.0;
     let got = f64::from(s.heading.to_millidegrees()) / 1000.0;
     assert!((got - want).abs() < 0.2, "{got} vs {want}");
-    finish(c);
+    done(c);
 }
 
 #[test]
 fn no_data_ready_means_would_block_and_one_transfer() {
-    let mut c = running(&[I2cT::write_read(AK, vec![0x02], vec![0x00])]);
+    let mut c = new_compass(&[I2cT::write_read(AK, vec![ST1], vec![0x00])]);
     assert_eq!(c.poll(), Err(nb::Error::WouldBlock));
-    finish(c);
+    done(c);
 }
 
 #[test]
 fn an_overflowed_sample_is_dropped_and_the_next_one_is_used() {
-    let script = [read_script(0x01, [30000, 20000, 0], 0x18), read_script(0x03, [10, 20, 30], 0x10)].concat();
-    let mut c = running(&script);
+    let script =
+        [read_script(DRDY, [30000, 20000, 0], BITM | HOFL), read_script(DRDY | 0x02, [10, 20, 30], BITM)].concat();
+    let mut c = new_compass(&script);
     assert_eq!(c.poll(), Err(nb::Error::Other(SensorError::BadSample)));
     // DOR set too (a skipped sample): the sample itself is fine.
     assert_eq!(c.poll().map(|s| s.raw), Ok(MagCounts { x: 10, y: 20, z: 30 }));
-    finish(c);
+    done(c);
 }
 
 #[test]
@@ -120,13 +70,13 @@ fn read_errors_are_typed() {
         (1, ErrorKind::ArbitrationLoss, SensorError::Bus),
     ];
     for (step, kind, want) in cases {
-        let mut script = read_script(0x01, [1, 2, 3], 0x10);
+        let mut script = read_script(DRDY, [1, 2, 3], BITM);
         script.truncate(step + 1);
         let failing = script.pop().unwrap().with_error(kind);
         script.extend(retried(failing));
-        let mut c = running(&script);
+        let mut c = new_compass(&script);
         assert_eq!(c.poll(), Err(nb::Error::Other(want)), "{step} {kind:?}");
-        finish(c);
+        done(c);
     }
 }
 
@@ -141,33 +91,53 @@ fn failing_bring_up(step: usize, fail: Vec<I2cT>, delays: usize, want: SensorErr
     assert_eq!(c.reinit(), Err(want), "step {step}");
     assert!(!c.is_running());
     assert_eq!(c.poll(), Err(nb::Error::Other(SensorError::NotReady)));
-    finish(c);
+    done(c);
 }
 
 #[test]
 fn bring_up_errors_are_typed() {
     // Nobody at 0x68.
-    failing_bring_up(0, retried(I2cT::write_read(MPU, vec![0x75], vec![0]).with_error(NACK)), 0, SensorError::Missing);
+    failing_bring_up(
+        0,
+        retried(I2cT::write_read(MPU, vec![WHO_AM_I], vec![0]).with_error(NACK)),
+        0,
+        SensorError::Missing,
+    );
     // An MPU6500: no magnetometer.
-    failing_bring_up(0, vec![I2cT::write_read(MPU, vec![0x75], vec![0x70])], 0, SensorError::Missing);
+    failing_bring_up(0, vec![I2cT::write_read(MPU, vec![WHO_AM_I], vec![0x70])], 0, SensorError::Missing);
     // Reset not acknowledged.
-    failing_bring_up(1, retried(I2cT::write(MPU, vec![0x6B, 0x80]).with_error(ErrorKind::Bus)), 0, SensorError::Bus);
+    failing_bring_up(
+        1,
+        retried(I2cT::write(MPU, vec![PWR_MGMT_1, 0x80]).with_error(ErrorKind::Bus)),
+        0,
+        SensorError::Bus,
+    );
     // Bypass write lost.
-    failing_bring_up(5, retried(I2cT::write(MPU, vec![0x37, 0x02]).with_error(ErrorKind::Bus)), 1, SensorError::Bus);
+    failing_bring_up(
+        5,
+        retried(I2cT::write(MPU, vec![INT_PIN_CFG, 0x02]).with_error(ErrorKind::Bus)),
+        1,
+        SensorError::Bus,
+    );
     // The AK8963 does not show up (bypass did not take).
-    failing_bring_up(6, retried(I2cT::write_read(AK, vec![0x00], vec![0]).with_error(NACK)), 1, SensorError::Missing);
+    failing_bring_up(6, retried(I2cT::write_read(AK, vec![WIA], vec![0]).with_error(NACK)), 1, SensorError::Missing);
     // Something else at 0x0C.
-    failing_bring_up(6, vec![I2cT::write_read(AK, vec![0x00], vec![0x00])], 1, SensorError::Missing);
+    failing_bring_up(6, vec![I2cT::write_read(AK, vec![WIA], vec![0x00])], 1, SensorError::Missing);
     // The two fuse-ROM reads disagree: a corrupted transfer.
-    failing_bring_up(10, vec![I2cT::write_read(AK, vec![0x10], vec![0x40, 0xB0, 0xFE])], 3, SensorError::Bus);
+    failing_bring_up(10, vec![I2cT::write_read(AK, vec![ASAX], vec![0x40, 0xB0, 0xFE])], 3, SensorError::Bus);
     // Continuous mode not set.
-    failing_bring_up(12, retried(I2cT::write(AK, vec![0x0A, 0x16]).with_error(ErrorKind::Bus)), 4, SensorError::Bus);
+    failing_bring_up(
+        12,
+        retried(I2cT::write(AK, vec![CNTL1, CONTINUOUS_100HZ_16BIT]).with_error(ErrorKind::Bus)),
+        4,
+        SensorError::Bus,
+    );
 }
 
 #[test]
 fn a_new_calibration_takes_effect_on_the_next_read() {
-    let script = [read_script(0x01, [300, 0, 0], 0x10), read_script(0x01, [300, 0, 0], 0x10)].concat();
-    let mut c = running(&script);
+    let script = [read_script(DRDY, [300, 0, 0], BITM), read_script(DRDY, [300, 0, 0], BITM)].concat();
+    let mut c = new_compass(&script);
     let before = c.poll().unwrap();
     let mut cal = c.calibration();
     cal.bias = [0, 0, 0];
@@ -176,5 +146,5 @@ fn a_new_calibration_takes_effect_on_the_next_read() {
     let after = c.poll().unwrap();
     assert_ne!(before.field, after.field);
     assert_eq!(after.field.x, apply_asa(300, ASA[0]));
-    finish(c);
+    done(c);
 }

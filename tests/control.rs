@@ -614,8 +614,20 @@ fn calibration_turns_in_place_applies_and_prints_the_result() {
     assert!(lines[1].starts_with("# pub const CALIBRATION: MagCalibration = MagCalibration::from_f64([79.0, 35.0, "));
     let cal = ctl.compass().calibration;
     assert_eq!(&cal.bias[..2], &[79, 35]);
-    // the line is the driver's ConfigLine, written without core::fmt
-    assert_eq!(lines[1], format!("# {}", paperbot::driver::calibration::ConfigLine(&cal)));
+    // the line to paste, from the applied calibration: biases as integers,
+    // scales (Q16) in millionths rounded half away from zero
+    let scale = |q16: i32| {
+        let m = (u64::from(q16.unsigned_abs()) * 1_000_000 + (1 << 15)) >> 16;
+        format!("{}{}.{:06}", if q16 < 0 { "-" } else { "" }, m / 1_000_000, m % 1_000_000)
+    };
+    let [b0, b1, b2] = cal.bias;
+    let [s0, s1, s2] = cal.scale_q16.map(scale);
+    assert_eq!(
+        lines[1],
+        format!("# pub const CALIBRATION: MagCalibration = MagCalibration::from_f64([{b0}.0, {b1}.0, {b2}.0], [{s0}, {s1}, {s2}]);")
+    );
+    // the same text as the host-side ConfigLine (core::fmt)
+    assert_eq!(lines[1], format!("# {}", paperbot::model::compass::ConfigLine(&cal)));
     ctl.tick(3_000_000, &mut out);
     assert_eq!(servos(&mut ctl), neutral());
 }

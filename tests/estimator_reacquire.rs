@@ -162,7 +162,7 @@ fn the_position_stays_within_the_margin_of_the_arena() {
 /// The integer square roots behind the one-sigma telemetry figures.
 #[test]
 fn integer_square_roots_are_floors() {
-    use paperbot::model::estimator::{isqrt, isqrt64};
+    use paperbot::math::{isqrt, isqrt64};
     let mut rng = paperbot::sim::noise::Rng::new(99);
     let mut xs: Vec<u64> = vec![0, 1, 2, 3, 4, 15, 16, 17, u64::from(u32::MAX), u64::MAX, (1 << 62) - 1, 1 << 62];
     for _ in 0..100_000 {

@@ -7,28 +7,19 @@ mod common;
 use std::cell::RefCell;
 use std::rc::Rc;
 
-use common::vl53l0x_script::{address_change_index, bring_up_script, Kind, BRING_UP};
+use common::i2c::{retried, NACK};
+use common::vl53l0x_script::{
+    address_change_index, bring_up_script, done, new_front_lidar, read_script, waits, Kind, BRING_UP,
+};
 use embedded_hal::digital::{ErrorType as PinErrorType, OutputPin};
 use embedded_hal::i2c::{ErrorKind, ErrorType, I2c, NoAcknowledgeSource, Operation};
-use embedded_hal_mock::eh1::delay::{CheckedDelay, Transaction as DelayT};
+use embedded_hal_mock::eh1::delay::CheckedDelay;
 use embedded_hal_mock::eh1::digital::{Mock as PinMock, State, Transaction as PinT};
 use embedded_hal_mock::eh1::i2c::{Mock as I2cMock, Transaction as I2cT};
 use paperbot::config::{self, i2c::FRONT_LIDAR_ADDR as FRONT, i2c::RIGHT_LIDAR_ADDR as RIGHT};
 use paperbot::driver::lidar::{bring_up, Lidar};
 use paperbot::driver::{LidarSample, RangeSensor, SensorError};
 use paperbot::model::lidar::Range;
-
-const NACK: ErrorKind = ErrorKind::NoAcknowledge(NoAcknowledgeSource::Address);
-
-/// A failing transaction as the driver sends it: once, then once per retry
-/// (`driver::bus::Retry`, `config::i2c::TRANSACTION_RETRIES`).
-fn retried(t: I2cT) -> Vec<I2cT> {
-    vec![t; usize::from(paperbot::config::i2c::TRANSACTION_RETRIES) + 1]
-}
-
-fn waits() -> Vec<DelayT> {
-    vec![DelayT::delay_us(config::lidar::RESET_TIME_US), DelayT::delay_us(config::lidar::BOOT_TIME_US)]
-}
 
 /// Shared event log: pin edges and bus transfers in the order they happen.
 type Log = Rc<RefCell<Vec<String>>>;
@@ -116,40 +107,17 @@ fn pair_bring_up_holds_the_right_lidar_in_reset_until_the_front_one_has_moved() 
 }
 
 /// A front lidar brought up on a mock, with `then` scripted after.
-fn running_front(then: &[I2cT]) -> (Lidar<I2cMock, PinMock, CheckedDelay>, I2cMock) {
-    let i2c = I2cMock::new(&[bring_up_script(FRONT), then.to_vec()].concat());
-    let pin = PinMock::new(&[PinT::set(State::Low), PinT::set(State::High)]);
-    let mut lidar = Lidar::front(i2c.clone(), pin, CheckedDelay::new(&waits()));
-    lidar.reinit().unwrap();
-    (lidar, i2c)
-}
-
-fn finish(lidar: Lidar<I2cMock, PinMock, CheckedDelay>) {
-    let (mut i2c, mut pin, mut delay) = lidar.release();
-    i2c.done();
-    pin.done();
-    delay.done();
-}
-
-fn read_script(addr: u8, status: u8, mm: u16) -> Vec<I2cT> {
-    vec![
-        I2cT::write_read(addr, vec![0x13], vec![status]),
-        I2cT::write_read(addr, vec![0x1E], mm.to_be_bytes().to_vec()),
-        I2cT::write(addr, vec![0x0B, 0x01]),
-    ]
-}
-
 #[test]
 fn reinit_is_reset_boot_wait_init_and_address_change() {
     // The whole of `running_front`: XSHUT low, 10 ms, high, 2 ms, the crate's
     // init at 0x29, the move, then budget and start at the new address.
-    let (lidar, _) = running_front(&[]);
+    let (lidar, _) = new_front_lidar(&[]);
     assert_eq!(BRING_UP.get(address_change_index()).map(|s| s.write), Some(&[0x8A, 0x16][..]));
     assert!(BRING_UP[..address_change_index()].iter().all(|s| s.at == common::vl53l0x_script::At::Boot));
     assert!(BRING_UP[address_change_index() + 1..].iter().all(|s| s.at == common::vl53l0x_script::At::New));
     // Last steps: continuous back-to-back start.
     assert_eq!(BRING_UP.last().map(|s| (s.kind, s.write)), Some((Kind::Set, &[0x00, 0x02][..])));
-    finish(lidar);
+    done(lidar);
 }
 
 #[test]
@@ -161,7 +129,7 @@ fn range_reads_go_through_the_model() {
         read_script(FRONT, 0x07, 10),
     ]
     .concat();
-    let (mut lidar, _) = running_front(&script);
+    let (mut lidar, _) = new_front_lidar(&script);
     assert_eq!(lidar.poll(), Ok(LidarSample { raw_mm: 300, range: config::lidar::FRONT.range(300) }));
     match config::lidar::FRONT.range(300) {
         Range::Target(d) => assert!((d.to_mm_f64() - (0.9849 * 300.0 - 56.2563)).abs() < 0.01),
@@ -170,7 +138,7 @@ fn range_reads_go_through_the_model() {
     assert_eq!(lidar.poll(), Err(nb::Error::WouldBlock));
     assert_eq!(lidar.poll().map(|s| s.range), Ok(Range::NoTarget));
     assert_eq!(lidar.poll().map(|s| s.range), Ok(Range::TooClose));
-    finish(lidar);
+    done(lidar);
 }
 
 #[test]
@@ -186,9 +154,9 @@ fn read_errors_are_typed() {
         script.truncate(step + 1);
         let failing = script.pop().unwrap().with_error(kind);
         script.extend(retried(failing));
-        let (mut lidar, _) = running_front(&script);
+        let (mut lidar, _) = new_front_lidar(&script);
         assert_eq!(lidar.poll(), Err(nb::Error::Other(want)), "step {step} {kind:?}");
-        finish(lidar);
+        done(lidar);
     }
 }
 
@@ -197,7 +165,7 @@ fn a_lidar_not_brought_up_is_not_ready_and_touches_nothing() {
     let i2c = I2cMock::new(&[]);
     let mut lidar = Lidar::front(i2c, PinMock::new(&[]), CheckedDelay::new(&[]));
     assert_eq!(lidar.poll(), Err(nb::Error::Other(SensorError::NotReady)));
-    finish(lidar);
+    done(lidar);
 }
 
 /// Bring-up scripts that fail at `step` (with `kind`, or with the given
@@ -212,7 +180,7 @@ fn failing_bring_up(step: usize, fail: Vec<I2cT>, want: SensorError) {
     assert_eq!(lidar.reinit(), Err(want), "step {step}");
     assert!(!lidar.is_running());
     assert_eq!(lidar.poll(), Err(nb::Error::Other(SensorError::NotReady)));
-    finish(lidar);
+    done(lidar);
 }
 
 #[test]
@@ -248,7 +216,7 @@ fn a_chip_that_never_gets_ready_times_out_after_the_poll_limit() {
     let pin = PinMock::new(&[PinT::set(State::Low), PinT::set(State::High), PinT::set(State::Low)]);
     let mut lidar = Lidar::front(I2cMock::new(&script), pin, CheckedDelay::new(&waits()));
     assert_eq!(lidar.reinit(), Err(SensorError::Timeout));
-    finish(lidar);
+    done(lidar);
 }
 
 #[test]

@@ -1,13 +1,13 @@
 //! Telemetry rows, status lines and the integer-only formatting: golden
-//! lines, the widest row, the host-side row parser and its round trip, and
-//! a check that the protocol's source holds no float.
+//! lines, the widest row, and the host-side row parser and its round trip.
 
 mod common;
 
 use common::rng::Rng;
 use heapless::String;
 use paperbot::control::protocol::number::{
-    div_rem_1000, div_rem_10k, parse_fixed, push_fixed, push_fixed_parts, put_template, NumError, TextOut,
+    div_rem_1000, div_rem_10k, parse_fixed, push_fixed, push_fixed_parts, push_i32, push_str, push_text, push_u32,
+    NumError, TextOut,
 };
 use paperbot::control::protocol::{
     classify_line, format_row, format_status, format_telemetry, parse_telemetry_row, telemetry_header, FaultCounters,
@@ -383,45 +383,31 @@ fn integer_decimal_formatting() {
     assert!(push_fixed(&mut tiny, -1234, 1).is_err());
 }
 
-/// Templates: each `%` and its code takes the next value of its kind:
-/// `0`..`9` an unsigned number with that many decimals and `a`..`j` an
-/// i32's bits (as `push_fixed_parts` / `push_fixed` write them), `s` a text
-/// (as `push_text`: anything but printable ASCII is `?`).
+/// The plain writers into both buffer kinds: integers at both ends of
+/// their range, text with anything but printable ASCII as `?`, and an
+/// overflow that keeps what fitted.
 #[test]
-fn template_lines() {
-    type Case<'a> = (&'a str, &'a [u32], &'a [&'a str], &'a str);
-    let cases: &[Case] = &[
-        ("no slots", &[], &[], "no slots"),
-        ("", &[], &[], ""),
-        ("%0", &[7], &[], "7"),
-        ("a=%c b=%3", &[-1234i32 as u32, 5], &[], "a=-12.34 b=0.005"),
-        ("%s%b%s", &[0], &["x", ""], "x0.0"),
-        ("-0: %c", &[0], &[], "-0: 0.00"),
-        ("%j %9", &[-1i32 as u32, 1], &[], "-0.000000001 0.000000001"),
-        ("max %0 min %a", &[u32::MAX, i32::MIN as u32], &[], "max 4294967295 min -2147483648"),
-        ("2^31: %0 %a", &[1 << 31, 1 << 31], &[], "2^31: 2147483648 -2147483648"),
-        ("text %s end", &[], &["tab\there\u{e9}\n"], "text tab?here??? end"),
-        // values of each kind are taken in order, whatever the other kind does
-        ("%s=%0, %s=%a", &[1, -2i32 as u32], &["one", "two"], "one=1, two=-2"),
-        ("%0 and %0 (one number short)", &[1], &[], "1 and  (one number short)"),
-        ("%0 (one number too many)", &[1, 2], &[], "1 (one number too many)"),
-        ("%s (a text short) %s", &[], &["t"], "t (a text short) "),
-        // an unknown code, and a slot at the end, write nothing and take nothing
-        ("%x%0 %", &[4], &[], "4 "),
-        ("100%% sure", &[], &[], "100 sure"),
-    ];
-    for &(template, nums, texts, want) in cases {
-        let mut out: String<64> = String::new();
-        put_template(&mut out, template, nums, texts).expect("fits");
-        assert_eq!(out.as_str(), want, "{template:?}");
-        let mut line: OutLine<64> = OutLine::new();
-        put_template(&mut line, template, nums, texts).expect("fits");
-        assert_eq!(&*line, want, "{template:?} into an OutLine");
+fn plain_writers() {
+    fn write(out: &mut dyn TextOut) -> Result<(), Overflow> {
+        push_u32(out, u32::MAX)?;
+        push_str(out, " ")?;
+        push_i32(out, i32::MIN)?;
+        push_str(out, " ")?;
+        push_i32(out, 0)?;
+        push_str(out, " ")?;
+        push_text(out, "tab\there\u{e9}\n")
     }
+    let want = "4294967295 -2147483648 0 tab?here???";
+    let mut out: String<64> = String::new();
+    write(&mut out).expect("fits");
+    assert_eq!(out.as_str(), want);
+    let mut line: OutLine<64> = OutLine::new();
+    write(&mut line).expect("fits");
+    assert_eq!(&*line, want);
     // too long: an error, with what fitted kept
     let mut tiny: String<8> = String::new();
-    assert_eq!(put_template(&mut tiny, "abc %0 def", &[12_345], &[]), Err(Overflow));
-    assert_eq!(tiny.as_str(), "abc 1234");
+    assert_eq!(write(&mut tiny), Err(Overflow));
+    assert_eq!(tiny.as_str(), "42949672");
 }
 
 /// What `push_fixed_parts` must write, by std formatting.
@@ -542,24 +528,6 @@ fn out_line_buffer() {
     let mut tiny: OutLine<20> = OutLine::new();
     assert_eq!(format_row(&row, &mut tiny), Err(Overflow));
     assert_eq!(tiny.as_str(), &b.as_str()[..20]);
-}
-
-/// No float type in the protocol's source: the robot gets no float code from
-/// it (and no core::fmt, whose float formatting would come along).
-#[test]
-fn protocol_source_has_no_float_and_no_fmt() {
-    let root = concat!(env!("CARGO_MANIFEST_DIR"), "/src/control");
-    let mut files = vec![std::path::PathBuf::from(format!("{root}/protocol.rs"))];
-    for entry in std::fs::read_dir(format!("{root}/protocol")).expect("protocol/") {
-        files.push(entry.expect("entry").path());
-    }
-    assert!(files.len() >= 6, "{files:?}");
-    for path in files {
-        let src = std::fs::read_to_string(&path).expect("read");
-        for banned in ["f32", "f64", "core::fmt", "fmt::", "write!", "format!", "format_args", "as_f", "{:"] {
-            assert!(!src.contains(banned), "{} contains {banned:?}", path.display());
-        }
-    }
 }
 
 /// Every fault counter at its largest value (the widest row and status).

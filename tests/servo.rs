@@ -5,9 +5,9 @@
 use std::cell::RefCell;
 use std::rc::Rc;
 
-use paperbot::board::servo_pulse::{PulseOutput, PulseWidthUs};
 use paperbot::config;
 use paperbot::driver::servo::{pulse_ns, pulse_width, ServoPair};
+use paperbot::driver::servo::{PulseOutput, PulseWidthUs};
 use paperbot::driver::Servos;
 use paperbot::model::{ServoCmd, Trim};
 

@@ -189,6 +189,7 @@ impl<P: I2cPins, C: CycleClock> BitBangI2c<P, C> {
         self.timing
     }
 
+    // bus timing: inlined into the bit loop, so its cost stays inside a clock phase
     #[inline(always)]
     fn wait(&mut self, since: u32, cycles: u32) {
         while self.clock.now().wrapping_sub(since) < cycles {}
@@ -196,6 +197,7 @@ impl<P: I2cPins, C: CycleClock> BitBangI2c<P, C> {
 
     /// Releases SCL and waits until it reads high (clock stretching, rise
     /// time). Returns the cycle count at which it was seen high.
+    // bus timing: inlined into the bit loop, so its cost stays inside a clock phase
     #[inline(always)]
     fn scl_high(&mut self) -> Result<u32, Error> {
         self.pins.scl_release();
@@ -211,6 +213,7 @@ impl<P: I2cPins, C: CycleClock> BitBangI2c<P, C> {
     }
 
     /// Pulls SCL low now.
+    // bus timing: inlined into the bit loop, so its cost stays inside a clock phase
     #[inline(always)]
     fn scl_low(&mut self) {
         self.t_fall = self.clock.now();
@@ -222,6 +225,7 @@ impl<P: I2cPins, C: CycleClock> BitBangI2c<P, C> {
     /// clock period since the last fall, then pulls SCL low. The fall is
     /// timed from the deadline, so the bus runs at `period` whatever the
     /// code in between costs (as long as it fits).
+    // bus timing: inlined into the bit loop, so its cost stays inside a clock phase
     #[inline(always)]
     fn end_high(&mut self, th: u32) {
         loop {
@@ -282,6 +286,7 @@ impl<P: I2cPins, C: CycleClock> BitBangI2c<P, C> {
         }
     }
 
+    // bus timing: inlined into the bit loop, so its cost stays inside a clock phase
     #[inline(always)]
     fn write_bit(&mut self, bit: bool) -> Result<(), Error> {
         if bit {
@@ -302,6 +307,7 @@ impl<P: I2cPins, C: CycleClock> BitBangI2c<P, C> {
         }
     }
 
+    // bus timing: inlined into the bit loop, so its cost stays inside a clock phase
     #[inline(always)]
     fn read_bit(&mut self) -> Result<bool, Error> {
         self.pins.sda_release();

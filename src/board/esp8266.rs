@@ -268,7 +268,7 @@ pub struct ServoTimer {
 impl ServoTimer {
     /// Starts the pulses (both off until the loop publishes widths).
     pub fn start(timer: pac::TIMER, left: Gpio5<Output<PushPull>>, right: Gpio4<Output<PushPull>>) -> Self {
-        SERVO_MAILBOX.publish(super::servo_pulse::PulseWidthUs::OFF, super::servo_pulse::PulseWidthUs::OFF);
+        SERVO_MAILBOX.publish(crate::driver::servo::PulseWidthUs::OFF, crate::driver::servo::PulseWidthUs::OFF);
         timer.frc1_ctrl.write(|w| {
             w.timer_enable().set_bit().prescale_divider().devided_by_16().interrupt_type().edge().rollover().clear_bit()
         });

@@ -49,6 +49,7 @@
 use core::sync::atomic::{AtomicU32, Ordering};
 
 use crate::config;
+use crate::driver::servo::{PulseOutput, PulseWidthUs};
 
 /// CPU cycles (CCOUNT counts) per microsecond: 80.
 pub const CYCLES_PER_US: u32 = config::board::CPU_HZ / 1_000_000;
@@ -97,49 +98,13 @@ const _: () = {
     assert!(START_DELAY_CYCLES > GUARD_CYCLES);
 };
 
-/// A servo pulse width in microseconds; 0 means no pulses on that pin.
-#[derive(Clone, Copy, PartialEq, Eq, Debug, Default)]
-pub struct PulseWidthUs(pub u16);
-
-impl PulseWidthUs {
-    /// No pulses: the pin stays low.
-    pub const OFF: Self = Self(0);
-
-    /// `us` clamped to the servo's safe window ([`config::servo::SAFE_MIN_US`]
-    /// ..= [`config::servo::SAFE_MAX_US`]); 0 stays [`Self::OFF`].
-    #[inline(always)]
-    pub const fn safe(us: u32) -> Self {
-        if us == 0 {
-            return Self::OFF;
-        }
-        let c = if us < config::servo::SAFE_MIN_US {
-            config::servo::SAFE_MIN_US
-        } else if us > config::servo::SAFE_MAX_US {
-            config::servo::SAFE_MAX_US
-        } else {
-            us
-        };
-        // c <= SAFE_MAX_US <= u16::MAX (asserted above)
-        Self(c as u16)
-    }
-
-    pub const fn is_off(self) -> bool {
-        self.0 == 0
-    }
-
-    /// The width in CPU cycles after clamping (0 for OFF), at most
-    /// [`MAX_WIDTH_CYCLES`].
-    #[inline(always)]
-    pub const fn cycles(self) -> u32 {
-        // <= SAFE_MAX_US * 80 (asserted to fit above): exact, never saturates.
-        (Self::safe(self.0 as u32).0 as u32).saturating_mul(CYCLES_PER_US)
-    }
-}
-
-/// Where the servo driver sends pulse widths.
-pub trait PulseOutput {
-    /// Both widths, applied together from the next frame on.
-    fn set_widths(&mut self, left: PulseWidthUs, right: PulseWidthUs);
+/// A width in CPU cycles after clamping (0 for OFF), at most
+/// [`MAX_WIDTH_CYCLES`].
+// IRAM: part of the FRC1 interrupt handler (see `on_alarm`)
+#[inline(always)]
+const fn width_cycles(w: PulseWidthUs) -> u32 {
+    // <= SAFE_MAX_US * 80 (asserted to fit above): exact, never saturates.
+    (PulseWidthUs::safe(w.0 as u32).0 as u32).saturating_mul(CYCLES_PER_US)
 }
 
 /// The loop-to-interrupt mailbox: both widths in one 32-bit word (left in
@@ -162,6 +127,7 @@ impl PulseMailbox {
     }
 
     /// The newest pair (left, right) in one load. Called by the interrupt.
+    // IRAM: part of the FRC1 interrupt handler (see `on_alarm`)
     #[inline(always)]
     pub fn latest(&self) -> (PulseWidthUs, PulseWidthUs) {
         let w = self.word.load(Ordering::Acquire);
@@ -209,6 +175,7 @@ pub enum Phase {
 }
 
 impl Phase {
+    // IRAM: part of the FRC1 interrupt handler (see `on_alarm`)
     #[inline(always)]
     const fn next(self) -> Self {
         match self {
@@ -237,15 +204,17 @@ pub struct FramePlan {
 }
 
 impl FramePlan {
+    // IRAM: part of the FRC1 interrupt handler (see `on_alarm`)
     #[inline(always)]
     pub const fn new(left: PulseWidthUs, right: PulseWidthUs) -> Self {
-        Self { left: left.cycles(), right: right.cycles() }
+        Self { left: width_cycles(left), right: width_cycles(right) }
     }
 
     /// The edge of `phase`. An OFF channel gets its "fall" at the shortest
     /// width with both edges low, so the frame keeps its shape.
     /// Intervals: each >= SAFE_MIN_US or >= STAGGER - SAFE_MAX, and they sum
     /// to FRAME_CYCLES.
+    // IRAM: part of the FRC1 interrupt handler (see `on_alarm`)
     #[inline(always)]
     pub const fn edge(&self, phase: Phase) -> PlannedEdge {
         const MIN: u32 = config::servo::SAFE_MIN_US * CYCLES_PER_US;
@@ -310,6 +279,7 @@ impl PulseScheduler {
     /// The FRC1 interrupt: makes the due edge at its exact cycle and arms the
     /// alarm for the next one. Inlined, with everything it calls, so the
     /// whole handler sits in IRAM (`#[ram]` places only the handler itself).
+    // IRAM: inlined into the `#[ram]` handler
     #[inline(always)]
     pub fn on_alarm<T: PulseTimer>(&mut self, hw: &mut T, mailbox: &PulseMailbox) {
         if self.phase == Phase::LeftRise {

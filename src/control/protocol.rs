@@ -5,8 +5,8 @@
 //! Bounded buffers only (`heapless`), no allocation, and integer code only:
 //! numbers are parsed into fixed point and written back as decimals by
 //! [`number`], so the standard formatting machinery and its float code never
-//! reach the robot (this module's sources name no float type and no
-//! formatting macro; a test checks).
+//! reach the robot (`lx106/run.sh` checks that no soft-float routine is
+//! linked).
 //!
 //! # Command grammar
 //!

@@ -65,7 +65,7 @@ pub trait Servos {
 }
 
 /// A compass whose hard- and soft-iron calibration can be measured and
-/// replaced at run time (see [`calibration::MagCalibrator`]).
+/// replaced at run time (see [`crate::model::compass::MagCalibrator`]).
 pub trait MagCalibrate {
     /// The chip's factory sensitivity adjustment (read at bring-up).
     fn asa(&self) -> [u8; 3];
@@ -76,7 +76,6 @@ pub trait MagCalibrate {
 }
 
 pub mod bus;
-pub mod calibration;
 pub mod compass;
 pub mod lidar;
 pub mod servo;

@@ -6,7 +6,7 @@
 //! nanoseconds (one 1/256 command step is 40 ns), then clamped to the
 //! FS90R's safe window [`config::servo::SAFE_MIN_US`]..=`SAFE_MAX_US`.
 //!
-//! The pulses leave through the board's [`PulseOutput`]
+//! The pulses leave through a [`PulseOutput`], which the board implements
 //! (`board::servo_pulse`, the FRC1 interrupt's mailbox; a recording fake in
 //! tests and the simulator), which takes whole microseconds: the width is
 //! rounded to the nearest microsecond there (0.1 command step, about
@@ -16,11 +16,49 @@
 //! trimmed (see `model::actuator`); [`ServoPair::stop`] sends each servo its
 //! own neutral, 90 plus its trim, so "stop" means standing still.
 
-use crate::board::servo_pulse::{PulseOutput, PulseWidthUs};
 use crate::config;
 use crate::model::{ServoCmd, Trim};
 
 use super::Servos;
+
+/// A servo pulse width in microseconds; 0 means no pulses on that pin.
+#[derive(Clone, Copy, PartialEq, Eq, Debug, Default)]
+pub struct PulseWidthUs(pub u16);
+
+impl PulseWidthUs {
+    /// No pulses: the pin stays low.
+    pub const OFF: Self = Self(0);
+
+    /// `us` clamped to the servo's safe window ([`config::servo::SAFE_MIN_US`]
+    /// ..= [`config::servo::SAFE_MAX_US`]); 0 stays [`Self::OFF`].
+    pub const fn safe(us: u32) -> Self {
+        if us == 0 {
+            return Self::OFF;
+        }
+        let c = if us < config::servo::SAFE_MIN_US {
+            config::servo::SAFE_MIN_US
+        } else if us > config::servo::SAFE_MAX_US {
+            config::servo::SAFE_MAX_US
+        } else {
+            us
+        };
+        // c <= SAFE_MAX_US <= u16::MAX (asserted below)
+        Self(c as u16)
+    }
+
+    pub const fn is_off(self) -> bool {
+        self.0 == 0
+    }
+}
+
+/// Where the servo driver sends pulse widths.
+pub trait PulseOutput {
+    /// Both widths, applied together from the next frame on.
+    fn set_widths(&mut self, left: PulseWidthUs, right: PulseWidthUs);
+}
+
+const _: () =
+    assert!(config::servo::SAFE_MIN_US <= config::servo::SAFE_MAX_US && config::servo::SAFE_MAX_US <= u16::MAX as u32);
 
 #[allow(clippy::arithmetic_side_effects)] // compile time only; `%` by b != 0 (the loop's condition)
 const fn gcd(mut a: u64, mut b: u64) -> u64 {

@@ -23,69 +23,18 @@
 //! The `*_f64` constructors are `const fn`s for the config module: they are
 //! evaluated by the compiler, so no float code reaches the robot.
 
+mod mul;
+mod recip;
+mod shift;
 mod sin_table;
+mod sqrt;
 mod trig;
 
-pub use trig::{atan2, sin_cos, sin_cos_inline};
-
-/// High 32 bits of the signed 64-bit product `a * b`, i.e. `(a * b) >> 32`,
-/// from three 16x16 products (lx106: MULL/MUL16, no MULSH). The result is
-/// within 3 LSB of the exact floor (the dropped low partial products and
-/// carries); it never overflows.
-#[inline(always)]
-pub fn mul_hi(a: i32, b: i32) -> i32 {
-    let (ah, al) = (a >> 16, (a & 0xFFFF) as u32);
-    let (bh, bl) = (b >> 16, (b & 0xFFFF) as u32);
-    // |ah|, |bh| <= 2^15 and al, bl < 2^16: every product fits in i32, and
-    // the sum is at most 2^30 + 2 * 2^15 in magnitude.
-    let hh = ah.wrapping_mul(bh);
-    let hl = ah.wrapping_mul(bl as i32) >> 16;
-    let lh = (al as i32).wrapping_mul(bh) >> 16;
-    hh.wrapping_add(hl).wrapping_add(lh)
-}
-
-/// The high 32 bits of the 64-bit product `a * b`, from four 16 x 16-bit
-/// products (the lx106 has a 32-bit `MULL` but no multiply-high, and a
-/// `u64` product would be a `__muldi3` call).
-#[inline]
-pub fn mul_hi_u32(a: u32, b: u32) -> u32 {
-    let (a1, a0) = (a >> 16, a & 0xFFFF);
-    let (b1, b0) = (b >> 16, b & 0xFFFF);
-    // each factor < 2^16: every partial product < 2^32
-    let lo = a0.wrapping_mul(b0);
-    let m1 = a1.wrapping_mul(b0);
-    let m2 = a0.wrapping_mul(b1);
-    let hi = a1.wrapping_mul(b1);
-    // three terms < 2^16 each: < 2^18
-    let mid = (lo >> 16).wrapping_add(m1 & 0xFFFF).wrapping_add(m2 & 0xFFFF);
-    // the sum is floor(a * b / 2^32) <= (2^32 - 1)^2 / 2^32 < 2^32: no wrap
-    hi.wrapping_add(m1 >> 16).wrapping_add(m2 >> 16).wrapping_add(mid >> 16)
-}
-
-/// The exact signed product `a * b` as an `i64`, from 16-bit partial
-/// products: the low word is one 32-bit multiply (MULL), the high word
-/// three more and a carry. About 25 lx106 instructions, against ~55 for
-/// `i64::from(a) * i64::from(b)` (a `__muldi3` call) and ~245 for an
-/// overflow-checked i64 product. Out of line: its five calls (a
-/// correction's gate and state update) were 148 B more code inlined, for
-/// 43 fewer instructions per correction.
-#[inline(never)]
-pub fn mul_wide(a: i32, b: i32) -> i64 {
-    let (ah, al) = (a >> 16, a & 0xFFFF);
-    let (bh, bl) = (b >> 16, b & 0xFFFF);
-    // ah, bh in [-2^15, 2^15), al, bl in [0, 2^16): al bh and ah bl lie in
-    // (-2^31, 2^31), ah bh in [-2^30, 2^30], al bl < 2^32 as u32.
-    let ll = ((al as u32) * (bl as u32)) >> 16; // < 2^16
-    let lh = al * bh;
-    let hl = ah * bl;
-    // a b = 2^32 (ah bh + lh>>16 + hl>>16) + 2^16 (lh&0xFFFF + hl&0xFFFF + ll) + (al bl)&0xFFFF;
-    // the middle sum is below 3 * 2^16, its carry the rest of the high word.
-    let mid = (lh & 0xFFFF) + (hl & 0xFFFF) + ll as i32;
-    // the exact high word of a 64-bit product: fits i32
-    let hi = ah * bh + (lh >> 16) + (hl >> 16) + (mid >> 16);
-    let lo = a.wrapping_mul(b) as u32; // the exact low word
-    (i64::from(hi) << 32) | i64::from(lo)
-}
+pub use mul::{mul_hi, mul_hi_u, mul_hi_u32, mul_q30, mul_q30_unsat, mul_u31, mul_wide};
+pub use recip::reciprocal;
+pub use shift::{normalize, shift};
+pub use sqrt::{isqrt, isqrt64};
+pub use trig::{atan2, sin_cos};
 
 /// Rounds an `f64` to the nearest `i64` in a `const fn` (`f64::round` is not
 /// const on Rust 1.82).
@@ -98,7 +47,6 @@ pub const fn round_f64(x: f64) -> i64 {
 }
 
 /// Saturating `i64 -> i32` (const).
-#[inline(never)]
 pub const fn sat_i32(x: i64) -> i32 {
     if x > i32::MAX as i64 {
         i32::MAX
@@ -119,6 +67,8 @@ pub const fn sat_i32(x: i64) -> i32 {
 /// result): nothing on the state update's or the estimator's path divides.
 /// Every division in the robot's code is here, in [`div_i64`] (the ROM's
 /// `__divdi3`) or in [`div_round`] (one division of magnitudes).
+// a call: inlined, a division of small constants would become a 32-bit
+// `__udivsi3`, which the ROM linking leaves out
 #[inline(never)]
 pub const fn div_u64(n: u64, d: u64) -> Option<u64> {
     n.checked_div(d)
@@ -265,7 +215,6 @@ impl Coord {
         Coord((l.0 as i64) << 16)
     }
     /// The coordinate as a [`Length`], rounded and saturated to +-32.7 m.
-    #[inline(never)]
     pub fn to_length(self) -> Length {
         let bits = self.0.saturating_add(1 << 15) >> 16;
         Length(sat_i32(bits))
@@ -278,6 +227,7 @@ impl Coord {
     /// 2147 km of travel in one direction (days of driving at the robot's top
     /// speed), and a saturating i64 add costs 20 lx106 instructions where
     /// this costs 4.
+    // step bar
     #[inline(always)]
     pub fn add_q22(self, step: i32) -> Coord {
         Coord(self.0.wrapping_add(i64::from(step) << 10))
@@ -340,6 +290,7 @@ impl Speed {
     /// Distance covered in `dt`, in units of 2^-24 mm (|result| < 2^31: at
     /// most 65.5 mm, `MAX` over `Dt::MAX`).
     /// Two 16x16 products: `v = vh * 2^16 + vl`, `v dt / 2^8 = vh dt 2^8 + vl dt / 2^8`.
+    // step bar
     #[inline(always)]
     pub fn distance_q24(self, dt: Dt) -> i32 {
         let dt = u32::from(dt.0);
@@ -421,6 +372,7 @@ impl TurnRate {
     /// Rotation over `dt` as (whole angle LSBs, 2^-16 fraction). Exact:
     /// `w = wh 2^16 + wl`, `w dt = wh dt 2^16 + wl dt`, and the angle is
     /// modulo one turn, so the wrapping multiply is the right answer.
+    // step bar
     #[inline(always)]
     pub fn rotation(self, dt: Dt) -> (Angle, u16) {
         let dt = u32::from(dt.0);

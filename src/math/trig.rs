@@ -11,6 +11,7 @@ const SHIFT: u32 = 32 - INDEX_BITS;
 /// offset of (2^-32 turn << 5) into radians Q24. round(2 pi / 8 * 2^15).
 const DELTA_TO_Q24_Q15: i32 = 25_736;
 
+// step bar
 #[inline(always)]
 fn table(i: u32) -> i32 {
     // i <= 256 by construction; `get` keeps the robot's path free of panics.
@@ -24,17 +25,9 @@ fn table(i: u32) -> i32 {
 /// `sin(t + d) = s0 (1 - d^2/2) + c0 d` and `cos(t + d) = c0 (1 - d^2/2) - s0 d`,
 /// with `t` the nearest table angle (1024 per turn) and `|d| <= pi/1024`;
 /// the dropped terms are below 5e-9.
-#[inline]
-pub fn sin_cos(a: Angle) -> (i32, i32) {
-    sin_cos_inline(a)
-}
-
-/// [`sin_cos`], always inlined: for the state update's turn, the one caller
-/// whose instruction count has a bar (a call there costs more than the
-/// size of one copy is worth; everywhere else `sin_cos` is one out-of-line
-/// copy when the build optimises for size).
+// step bar: inlined into the turn step
 #[inline(always)]
-pub fn sin_cos_inline(a: Angle) -> (i32, i32) {
+pub fn sin_cos(a: Angle) -> (i32, i32) {
     let k = a.0.wrapping_add(1 << (SHIFT - 1)) >> SHIFT; // nearest index, 0..1023
     let delta = a.0.wrapping_sub(k << SHIFT) as i32; // [-2^21, 2^21)
     let i = k & 0xFF;

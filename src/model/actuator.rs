@@ -93,7 +93,6 @@ impl Line {
     }
     /// `y` in rad/s Q16 at `cmd`. 32-bit: |slope| < 2^15 (0.5 rad/s per
     /// step), cmd < 2^16.
-    #[inline(never)]
     pub fn eval_q16(&self, cmd: ServoCmd) -> i32 {
         let prod = i64::from(self.slope_q16) * i64::from(cmd.to_q8());
         let y = (prod >> 8) + i64::from(self.intercept_q16);

@@ -2,7 +2,11 @@
 //! adjustment (ASA), hard- and soft-iron correction, axis orientation and
 //! declination, giving the heading clockwise from north. Integer only.
 
+pub mod calibration;
+
 use crate::math::{atan2, round_f64, sat_i32, Angle};
+
+pub use calibration::{CalStatus, CalibrationError, ConfigLine, MagCalibrator};
 
 /// Raw AK8963 counts, in the chip's own axes.
 #[derive(Clone, Copy, PartialEq, Eq, Debug, Default)]

@@ -3,7 +3,18 @@
 //! the VL53L0X's output in mm and `distance` is from the car's reference
 //! point (the report's text has it the other way round; its data does not).
 
-use crate::math::{round_f64, sat_i32, Length};
+use crate::math::{round_f64, sat_i32, Angle, Length};
+
+/// Where a lidar sits relative to the car's reference point, in the car's
+/// frame (mm forward, mm right), and which way it looks (the config's
+/// `geometry::FRONT_LIDAR` and `RIGHT_LIDAR`).
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub struct LidarMount {
+    pub forward: Length,
+    pub right: Length,
+    /// Beam direction relative to the heading (clockwise).
+    pub direction: Angle,
+}
 
 /// One lidar's fitted line and its valid reading window.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]

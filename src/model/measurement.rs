@@ -40,8 +40,8 @@
 //! heading clockwise from north, in the same frame ([`expected_heading`]).
 
 use crate::config;
-use crate::config::geometry::LidarMount;
-use crate::math::{mul_hi, sin_cos, Angle, Coord, Length};
+use crate::math::{mul_hi, mul_q30, sin_cos, Angle, Coord, Length};
+use crate::model::lidar::LidarMount;
 use crate::model::state::Pose;
 
 /// A rectangular arena with its origin at a corner (see the module docs).
@@ -104,16 +104,10 @@ impl Wall {
 /// Three quarters of a turn, as an [`Angle`]'s bits.
 const THREE_QUARTERS: u32 = 3 << 30;
 
-/// `a * s` for `s` in Q2.30 (|s| <= 1): [`mul_hi`] gives Q-2, shifted back.
-/// Within 12 LSB of the exact product; saturates instead of overflowing.
-#[inline(always)]
-pub(crate) fn mul_q30(a: i32, s: i32) -> i32 {
-    mul_hi(a, s).saturating_mul(4)
-}
-
 /// [`Coord::to_length`] (rounded to nearest, saturated to +-32.7 m) without
 /// the 64-bit saturating add: `(c + 2^15) >> 16` is `(c >> 16)` plus bit 15
 /// of `c`, which cannot overflow (about 12 lx106 instructions against ~50).
+// tick bar
 #[inline(always)]
 fn coord_length(c: Coord) -> Length {
     let v = (c.0 >> 16) + ((c.0 >> 15) & 1); // |c >> 16| <= 2^47

@@ -13,5 +13,5 @@ pub mod measurement;
 pub mod state;
 
 pub use actuator::{ActuatorModel, Drive, Motion, MotionKind, ServoCmd, Trim};
-pub use lidar::{LidarModel, Range};
+pub use lidar::{LidarModel, LidarMount, Range};
 pub use state::{advance, step, Pose};

@@ -20,7 +20,7 @@
 //! straight step then needs no `sin_cos` at all and a turn only the new one.
 
 use crate::config;
-use crate::math::{mul_hi, sin_cos, sin_cos_inline, Angle, Coord, Dt, Length};
+use crate::math::{mul_hi, sin_cos, Angle, Coord, Dt, Length};
 use crate::model::actuator::Motion;
 
 /// `sin_cos(at)` and `D` times it, remembered.
@@ -36,6 +36,7 @@ struct Trig {
 }
 
 impl Trig {
+    // step bar (as every inline attribute in this file)
     #[inline(always)]
     fn of(at: Angle) -> Trig {
         Trig::with(at, sin_cos(at))
@@ -106,6 +107,7 @@ impl Pose {
 const D_Q24: i32 = config::geometry::ROTATION_TO_REFERENCE.0 << 8;
 
 /// Advances `pose` in place by `motion` held for `dt`: the robot's path.
+// step bar: the bar measures this one call
 #[inline(never)]
 pub fn advance(pose: &mut Pose, motion: Motion, dt: Dt) {
     match motion {
@@ -122,8 +124,7 @@ pub fn advance(pose: &mut Pose, motion: Motion, dt: Dt) {
             let (f, carry) = pose.theta_frac.overflowing_add(frac);
             let theta = pose.theta.wrapping_add(rot).wrapping_add(Angle(u32::from(carry)));
             let t0 = pose.trig();
-            // every turn step computes sin/cos: inlined (see `sin_cos_inline`)
-            let t1 = Trig::with(theta, sin_cos_inline(theta));
+            let t1 = Trig::with(theta, sin_cos(theta));
             // Q22 differences of values below 2^30: no overflow. The products
             // of one step's new heading are the next step's old ones, so a
             // turn telescopes exactly: no rounding builds up.

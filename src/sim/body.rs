@@ -2,7 +2,7 @@
 //! moved by the motion its servo commands make (with noise), and where its
 //! lidars sit. Host only.
 
-use crate::config::geometry::LidarMount;
+use crate::model::lidar::LidarMount;
 use crate::model::Motion;
 
 /// How a turn in place moves the reference point.

@@ -28,10 +28,10 @@ use super::noise::Rng;
 use super::script::Script;
 use super::sensors::{SimCompass, SimLidar, SimSensors};
 use crate::config;
-use crate::config::geometry::LidarMount;
 use crate::control::{Controller, LineSink, TICK_US};
 use crate::driver::{HeadingSensor, Servos};
 use crate::math::Length;
+use crate::model::lidar::LidarMount;
 use crate::model::{LidarModel, ServoCmd};
 
 /// The servos as the simulator sees them: the last commands set.

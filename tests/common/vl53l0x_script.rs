@@ -13,7 +13,12 @@
 //! [`Kind::Set`] steps, replied with zeros (one byte; six for the SPAD
 //! map, whose write the crate pairs with a six-byte read).
 
-use embedded_hal_mock::eh1::i2c::Transaction;
+use embedded_hal_mock::eh1::delay::{CheckedDelay, Transaction as DelayT};
+use embedded_hal_mock::eh1::digital::{Mock as PinMock, State, Transaction as PinT};
+use embedded_hal_mock::eh1::i2c::{Mock as I2cMock, Transaction};
+use paperbot::config::i2c::FRONT_LIDAR_ADDR;
+use paperbot::driver::lidar::Lidar;
+use paperbot::driver::RangeSensor;
 
 /// Which address a step goes to.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
@@ -247,4 +252,43 @@ pub fn bring_up_script(new_addr: u8) -> Vec<Transaction> {
             }
         })
         .collect()
+}
+
+/// Registers of a range read (the vl53l0x crate's names).
+pub const RESULT_INTERRUPT_STATUS: u8 = 0x13;
+/// `RESULT_RANGE_STATUS + 10`: the range in mm, big-endian.
+pub const RESULT_RANGE_MM: u8 = 0x1E;
+pub const SYSTEM_INTERRUPT_CLEAR: u8 = 0x0B;
+
+/// One range read at `addr`: the interrupt status, the range, the clear.
+pub fn read_script(addr: u8, status: u8, mm: u16) -> Vec<Transaction> {
+    vec![
+        Transaction::write_read(addr, vec![RESULT_INTERRUPT_STATUS], vec![status]),
+        Transaction::write_read(addr, vec![RESULT_RANGE_MM], mm.to_be_bytes().to_vec()),
+        Transaction::write(addr, vec![SYSTEM_INTERRUPT_CLEAR, 0x01]),
+    ]
+}
+
+/// The bring-up's waits: XSHUT low, then the chip's boot.
+pub fn waits() -> Vec<DelayT> {
+    use paperbot::config::lidar::{BOOT_TIME_US, RESET_TIME_US};
+    vec![DelayT::delay_us(RESET_TIME_US), DelayT::delay_us(BOOT_TIME_US)]
+}
+
+/// The front lidar brought up over mocks that then expect `then`; also
+/// returns a handle on the I2C mock.
+pub fn new_front_lidar(then: &[Transaction]) -> (Lidar<I2cMock, PinMock, CheckedDelay>, I2cMock) {
+    let i2c = I2cMock::new(&[bring_up_script(FRONT_LIDAR_ADDR), then.to_vec()].concat());
+    let pin = PinMock::new(&[PinT::set(State::Low), PinT::set(State::High)]);
+    let mut lidar = Lidar::front(i2c.clone(), pin, CheckedDelay::new(&waits()));
+    lidar.reinit().unwrap();
+    (lidar, i2c)
+}
+
+/// Checks that every expected transfer, pin edge and wait happened.
+pub fn done(lidar: Lidar<I2cMock, PinMock, CheckedDelay>) {
+    let (mut i2c, mut pin, mut delay) = lidar.release();
+    i2c.done();
+    pin.done();
+    delay.done();
 }

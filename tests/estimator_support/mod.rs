@@ -5,9 +5,9 @@
 #![allow(dead_code)]
 
 use paperbot::config;
-use paperbot::config::geometry::LidarMount;
 use paperbot::math::{Angle, Coord, Dt, Length};
 use paperbot::model::estimator::{Estimator, Update};
+use paperbot::model::lidar::LidarMount;
 use paperbot::model::lidar::{LidarModel, Range};
 use paperbot::model::measurement::LidarId;
 use paperbot::model::{step, Motion, Pose, ServoCmd};

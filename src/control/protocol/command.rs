@@ -1,7 +1,7 @@
 //! Commands: the grammar (see the module docs of [`super`]), the parser and
 //! the canonical form that `ok` responses echo.
 
-use super::number::{parse_fixed, push_str, put_template, NumError, TextOut};
+use super::number::{parse_fixed, push_fixed, push_fixed_parts, push_str, push_u32, NumError, TextOut};
 use super::{Overflow, MAX_LINE};
 use crate::config::{compass, serial};
 use crate::math::{Angle, Speed, TurnRate};
@@ -85,57 +85,66 @@ pub enum Field {
     Rate,
 }
 
-/// What [`Field`]'s methods report, one table row per field.
-struct FieldSpec {
-    name: &'static str,
-    unit: &'static str,
-    decimals: u32,
-    range: Option<(i32, i32)>,
-}
-
-// every limit is a small config constant (<= 360_000): the casts are exact
-const fn spec(name: &'static str, unit: &'static str, decimals: u32, lo: i32, hi: i32) -> FieldSpec {
-    FieldSpec { name, unit, decimals, range: Some((lo, hi)) }
-}
-
-/// In [`Field`]'s declaration order.
-static FIELDS: [FieldSpec; 12] = [
-    spec("speed", "m/s", 3, 1, serial::MAX_SPEED_MM_S as i32),
-    spec("turn rate", "rad/s", 3, 1, serial::MAX_TURN_MRAD_S as i32),
-    spec("duration", "s", 3, 1, serial::MAX_DURATION_MS as i32),
-    spec("left command", "", 2, 0, 18_000),
-    spec("right command", "", 2, 0, 18_000),
-    FieldSpec { name: "side", unit: "", decimals: 0, range: None },
-    spec("trim", "steps", 2, (serial::MAX_TRIM_CENTI as i32).wrapping_neg(), serial::MAX_TRIM_CENTI as i32),
-    spec("x", "mm", 0, (serial::MAX_POSE_MM as i32).wrapping_neg(), serial::MAX_POSE_MM as i32),
-    spec("y", "mm", 0, (serial::MAX_POSE_MM as i32).wrapping_neg(), serial::MAX_POSE_MM as i32),
-    spec("heading", "deg", 3, -360_000, 360_000),
-    spec("samples", "", 0, serial::MIN_CAL_SAMPLES as i32, serial::MAX_CAL_SAMPLES as i32),
-    spec("rate", "Hz", 0, 0, serial::MAX_TELEMETRY_HZ as i32),
-];
-
 impl Field {
-    fn spec(self) -> &'static FieldSpec {
-        // the table has a row per variant: `get` never fails
-        FIELDS.get(self as usize).unwrap_or(&FIELDS[0])
-    }
     /// The name used in messages.
     pub fn name(self) -> &'static str {
-        self.spec().name
+        match self {
+            Field::Speed => "speed",
+            Field::TurnRate => "turn rate",
+            Field::Duration => "duration",
+            Field::LeftCommand => "left command",
+            Field::RightCommand => "right command",
+            Field::Side => "side",
+            Field::Trim => "trim",
+            Field::X => "x",
+            Field::Y => "y",
+            Field::Heading => "heading",
+            Field::Samples => "samples",
+            Field::Rate => "rate",
+        }
     }
+
     /// The unit the user writes (empty for plain counts).
     pub fn unit(self) -> &'static str {
-        self.spec().unit
+        match self {
+            Field::Speed => "m/s",
+            Field::TurnRate => "rad/s",
+            Field::Duration => "s",
+            Field::Trim => "steps",
+            Field::X | Field::Y => "mm",
+            Field::Heading => "deg",
+            Field::Rate => "Hz",
+            Field::LeftCommand | Field::RightCommand | Field::Side | Field::Samples => "",
+        }
     }
+
     /// Decimal places accepted (the value's resolution).
     pub fn decimals(self) -> u32 {
-        self.spec().decimals
+        match self {
+            Field::Speed | Field::TurnRate | Field::Duration | Field::Heading => 3,
+            Field::LeftCommand | Field::RightCommand | Field::Trim => 2,
+            Field::Side | Field::X | Field::Y | Field::Samples | Field::Rate => 0,
+        }
     }
+
     /// Accepted range, inclusive, in units of `10^-decimals` (speed in mm/s,
     /// turn rate in mrad/s, duration in ms, commands and trim in 1/100 step,
     /// heading in millidegrees). `None` for [`Field::Side`] (not a number).
     pub fn range(self) -> Option<(i32, i32)> {
-        self.spec().range
+        // every limit is a small config constant (asserted below): the casts are exact
+        let symmetric = |max: u32| ((max as i32).wrapping_neg(), max as i32);
+        Some(match self {
+            Field::Speed => (1, serial::MAX_SPEED_MM_S as i32),
+            Field::TurnRate => (1, serial::MAX_TURN_MRAD_S as i32),
+            Field::Duration => (1, serial::MAX_DURATION_MS as i32),
+            Field::LeftCommand | Field::RightCommand => (0, 18_000),
+            Field::Side => return None,
+            Field::Trim => symmetric(serial::MAX_TRIM_CENTI),
+            Field::X | Field::Y => symmetric(serial::MAX_POSE_MM),
+            Field::Heading => (-360_000, 360_000),
+            Field::Samples => (i32::from(serial::MIN_CAL_SAMPLES), i32::from(serial::MAX_CAL_SAMPLES)),
+            Field::Rate => (0, i32::from(serial::MAX_TELEMETRY_HZ)),
+        })
     }
 }
 
@@ -181,19 +190,28 @@ impl ParseError {
         match *self {
             ParseError::Empty => push_str(out, "empty line"),
             // MAX_LINE <= 255 (asserted)
-            ParseError::TooLong => put_template(out, "line too long, max %0 bytes", &[MAX_LINE as u32], &[]),
+            ParseError::TooLong => {
+                push_str(out, "line too long, max ")?;
+                push_u32(out, MAX_LINE as u32)?;
+                push_str(out, " bytes")
+            }
             ParseError::NotAscii => push_str(out, "line has a byte that is not printable ASCII"),
             ParseError::UnknownCommand => push_str(out, "unknown command, try help"),
             ParseError::MissingArgument(f) => {
-                put_template(out, "missing %s, want ", &[], &[f.name()])?;
+                push_str(out, "missing ")?;
+                push_str(out, f.name())?;
+                push_str(out, ", want ")?;
                 write_want(out, f)
             }
             ParseError::BadNumber(f) | ParseError::BadChoice(f) => {
-                put_template(out, "bad %s, want ", &[], &[f.name()])?;
+                push_str(out, "bad ")?;
+                push_str(out, f.name())?;
+                push_str(out, ", want ")?;
                 write_want(out, f)
             }
             ParseError::OutOfRange(f) => {
-                put_template(out, "%s out of range ", &[], &[f.name()])?;
+                push_str(out, f.name())?;
+                push_str(out, " out of range ")?;
                 write_range(out, f)
             }
             ParseError::TrailingInput => push_str(out, "unexpected input after the arguments"),
@@ -210,7 +228,9 @@ fn write_want(out: &mut dyn TextOut, f: Field) -> Result<(), Overflow> {
     push_str(out, if f.decimals() == 0 { "an integer " } else { "a number " })?;
     write_range(out, f)?;
     if f.decimals() > 0 {
-        put_template(out, " with up to %0 decimals", &[f.decimals()], &[])?;
+        push_str(out, " with up to ")?;
+        push_u32(out, f.decimals())?;
+        push_str(out, " decimals")?;
     }
     Ok(())
 }
@@ -218,12 +238,14 @@ fn write_want(out: &mut dyn TextOut, f: Field) -> Result<(), Overflow> {
 /// "0.001..0.300 m/s" ("left or right" for the trim side)
 fn write_range(out: &mut dyn TextOut, f: Field) -> Result<(), Overflow> {
     let Some((lo, hi)) = f.range() else { return push_str(out, "left or right") };
-    // the field's decimals (<= 3) pick the slots' code
-    const RANGE: [&str; 4] = ["%a..%a%s%s", "%b..%b%s%s", "%c..%c%s%s", "%d..%d%s%s"];
-    let template = RANGE.get(f.decimals() as usize).copied().unwrap_or("");
-    let unit = f.unit();
-    let space = if unit.is_empty() { "" } else { " " };
-    put_template(out, template, &[lo as u32, hi as u32], &[space, unit])
+    push_fixed(out, lo, f.decimals())?;
+    push_str(out, "..")?;
+    push_fixed(out, hi, f.decimals())?;
+    if !f.unit().is_empty() {
+        push_str(out, " ")?;
+        push_str(out, f.unit())?;
+    }
+    Ok(())
 }
 
 fn is_space(b: &u8) -> bool {
@@ -404,7 +426,10 @@ pub fn parse(line: &[u8]) -> Result<Command, ParseError> {
 /// ` <seconds>` with three decimals, if there is a duration.
 fn push_duration(out: &mut dyn TextOut, duration_ms: Option<u32>) -> Result<(), Overflow> {
     match duration_ms {
-        Some(ms) => put_template(out, " %3", &[ms], &[]),
+        Some(ms) => {
+            push_str(out, " ")?;
+            push_fixed_parts(out, false, ms, 3)
+        }
         None => Ok(()),
     }
 }
@@ -421,23 +446,42 @@ pub fn format_command(cmd: &Command, out: &mut dyn TextOut) -> Result<(), Overfl
                 Motion::Turn(w) => (if w.to_bits() < 0 { "ccw" } else { "cw" }, w.to_mrad_s()),
                 Motion::Stop => return push_str(out, "stop"),
             };
-            put_template(out, "%s %3", &[value.unsigned_abs()], &[word])?;
+            push_str(out, word)?;
+            push_str(out, " ")?;
+            push_fixed_parts(out, false, value.unsigned_abs(), 3)?;
             push_duration(out, duration_ms)
         }
         Command::Stop => push_str(out, "stop"),
         Command::Servo { left, right, duration_ms } => {
-            put_template(out, "servo %2 %2", &[left.to_centi(), right.to_centi()], &[])?;
+            push_str(out, "servo ")?;
+            push_fixed_parts(out, false, left.to_centi(), 2)?;
+            push_str(out, " ")?;
+            push_fixed_parts(out, false, right.to_centi(), 2)?;
             push_duration(out, duration_ms)
         }
         Command::Trim { side, trim } => {
             let word = if side == Side::Left { "left" } else { "right" };
-            put_template(out, "trim %s %c", &[q8_to_centi(i32::from(trim.0)) as u32], &[word])
+            push_str(out, "trim ")?;
+            push_str(out, word)?;
+            push_str(out, " ")?;
+            push_fixed(out, q8_to_centi(i32::from(trim.0)), 2)
         }
         Command::SetPose { x_mm, y_mm, heading } => {
-            put_template(out, "pose %a %a %3", &[x_mm as u32, y_mm as u32, heading.to_millidegrees()], &[])
+            push_str(out, "pose ")?;
+            push_fixed(out, x_mm, 0)?;
+            push_str(out, " ")?;
+            push_fixed(out, y_mm, 0)?;
+            push_str(out, " ")?;
+            push_fixed_parts(out, false, heading.to_millidegrees(), 3)
         }
-        Command::Calibrate { samples } => put_template(out, "cal %0", &[u32::from(samples)], &[]),
-        Command::Rate { hz } => put_template(out, "rate %0", &[u32::from(hz)], &[]),
+        Command::Calibrate { samples } => {
+            push_str(out, "cal ")?;
+            push_u32(out, u32::from(samples))
+        }
+        Command::Rate { hz } => {
+            push_str(out, "rate ")?;
+            push_u32(out, u32::from(hz))
+        }
         Command::Status => push_str(out, "status"),
         Command::Help => push_str(out, "help"),
     }

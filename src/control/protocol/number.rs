@@ -31,18 +31,13 @@ pub trait TextOut {
     }
 }
 
-// Never inlined: one copy of each per buffer size rather than one per call
-// site (the formatters' calls are devirtualised where the buffer is known).
 impl<const N: usize> TextOut for String<N> {
-    #[inline(never)]
     fn put_str(&mut self, s: &str) -> Result<(), Overflow> {
         self.push_str(s).map_err(|_| Overflow)
     }
-    #[inline(never)]
     fn put_byte(&mut self, b: u8) -> Result<(), Overflow> {
         self.push(if b.is_ascii() { char::from(b) } else { '?' }).map_err(|_| Overflow)
     }
-    #[inline(never)]
     fn put_ascii(&mut self, bytes: &[u8]) -> Result<(), Overflow> {
         for &b in bytes {
             self.push(if b.is_ascii() { char::from(b) } else { '?' }).map_err(|_| Overflow)?;
@@ -140,53 +135,6 @@ pub fn push_text(out: &mut dyn TextOut, text: &str) -> Result<(), Overflow> {
     Ok(())
 }
 
-/// The slot in a [`put_template`] template, followed by its code.
-pub const SLOT: u8 = b'%';
-
-/// Appends `template` with each slot replaced by the next value of its
-/// kind. A slot is [`SLOT`] (`%`) and a code:
-/// - `0`..=`9`: the next of `nums` as an unsigned value with that many
-///   decimals (`%3` writes 1500 as `1.500`, see [`push_fixed_parts`]);
-/// - `a`..=`j`: the next of `nums` as an `i32`'s bits with 0..=9 decimals
-///   (`%c` writes -1234 as `-12.34`, see [`push_fixed`]);
-/// - `s`: the next of `texts`, as [`push_text`] writes it.
-///
-/// A slot past the last value of its kind, or with another code, writes
-/// nothing; the template's own text is written as [`TextOut::put_ascii`]
-/// writes it. The format lives in the template (flash data), so a call
-/// passes each number as one word: one call per line shape costs a few
-/// bytes of the robot's code per value.
-#[inline(never)]
-pub fn put_template(out: &mut dyn TextOut, template: &str, nums: &[u32], texts: &[&str]) -> Result<(), Overflow> {
-    let (mut nums, mut texts) = (nums.iter(), texts.iter());
-    let mut rest = template.as_bytes();
-    while let Some(i) = rest.iter().position(|&b| b == SLOT) {
-        let (text, tail) = rest.split_at(i); // i < rest.len()
-        out.put_ascii(text)?;
-        let code = tail.get(1).copied().unwrap_or(0);
-        match code {
-            b'0'..=b'9' => {
-                if let Some(&v) = nums.next() {
-                    push_fixed_parts(out, false, v, u32::from(code.wrapping_sub(b'0')))?;
-                }
-            }
-            b'a'..=b'j' => {
-                if let Some(&v) = nums.next() {
-                    push_fixed(out, v as i32, u32::from(code.wrapping_sub(b'a')))?;
-                }
-            }
-            b's' => {
-                if let Some(t) = texts.next() {
-                    push_text(out, t)?;
-                }
-            }
-            _ => {}
-        }
-        rest = tail.get(2..).unwrap_or(&[]);
-    }
-    out.put_ascii(rest)
-}
-
 /// `(v / 10_000, v % 10_000)` for every `u32`, without a division:
 /// `q = floor(v * m / 2^45)` with `m = ceil(2^45 / 10^4) = 0xD1B7_1759` (the
 /// reciprocal GCC and LLVM use). `m = 2^45 / 10^4 + e` with `e < 0.12`, so
@@ -276,7 +224,6 @@ impl Cursor {
     }
 
     /// Stores `b` at `i` (masked: always in the buffer).
-    #[inline(always)]
     fn set(&mut self, i: usize, b: u8) {
         if let Some(slot) = self.buf.get_mut(i & (CURSOR - 1)) {
             *slot = b;
@@ -302,7 +249,6 @@ impl Cursor {
     /// counted first, then the text is written from its last byte, four
     /// digits per reciprocal multiply by 10^4 and one per multiply by the
     /// reciprocal of 10 (no division).
-    #[inline(never)]
     pub(super) fn number(&mut self, negative: bool, magnitude: u32, decimals: u32) {
         let decimals = decimals.min(9) as usize;
         let minus = negative && magnitude != 0;
@@ -345,7 +291,6 @@ impl Cursor {
 
     /// Writes digit `d` (< 10) in front of `p`, after the point if `p` has
     /// reached it.
-    #[inline(always)]
     fn digit(&mut self, p: &mut usize, point: usize, d: u32) {
         *p = p.wrapping_sub(1);
         if *p == point {
@@ -386,7 +331,6 @@ impl Cursor {
 /// digits after the point (none and no point when `decimals` is 0), with a
 /// `-` in front when `negative` and the magnitude is not zero, in one
 /// [`TextOut::put_ascii`]. `decimals` above 9 is treated as 9.
-#[inline(never)]
 pub fn push_fixed_parts(out: &mut dyn TextOut, negative: bool, magnitude: u32, decimals: u32) -> Result<(), Overflow> {
     let mut text = Cursor::new();
     text.number(negative, magnitude, decimals);
@@ -394,7 +338,16 @@ pub fn push_fixed_parts(out: &mut dyn TextOut, negative: bool, magnitude: u32, d
 }
 
 /// Appends a signed scaled value as a decimal (see [`push_fixed_parts`]).
-#[inline(never)]
 pub fn push_fixed(out: &mut dyn TextOut, value: i32, decimals: u32) -> Result<(), Overflow> {
     push_fixed_parts(out, value < 0, value.unsigned_abs(), decimals)
+}
+
+/// Appends an unsigned integer.
+pub fn push_u32(out: &mut dyn TextOut, v: u32) -> Result<(), Overflow> {
+    push_fixed_parts(out, false, v, 0)
+}
+
+/// Appends a signed integer.
+pub fn push_i32(out: &mut dyn TextOut, v: i32) -> Result<(), Overflow> {
+    push_fixed(out, v, 0)
 }

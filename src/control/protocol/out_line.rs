@@ -40,14 +40,9 @@ impl<const N: usize> OutLine<N> {
     }
     /// The text. Every byte is ASCII (`put_byte` and `put_ascii`, the only
     /// writers of `buf`, store anything else as `?`), so it is valid UTF-8
-    /// as it stands: `core::str::from_utf8` would check it again, and its
-    /// decoder is 440 bytes of the robot's flash.
+    /// and the empty fallback is never taken.
     pub fn as_str(&self) -> &str {
-        let bytes = self.as_bytes();
-        debug_assert!(bytes.is_ascii());
-        // SAFETY: ASCII is valid UTF-8, and every byte of `buf` up to `len`
-        // is ASCII (see above; `buf` is private to this module).
-        unsafe { core::str::from_utf8_unchecked(bytes) }
+        core::str::from_utf8(self.as_bytes()).unwrap_or("")
     }
 }
 
@@ -58,24 +53,17 @@ impl<const N: usize> core::ops::Deref for OutLine<N> {
     }
 }
 
-// Never inlined: one copy per buffer size (the firmware has one).
 impl<const N: usize> TextOut for OutLine<N> {
     /// Appends `s` byte by byte (a non-ASCII byte is stored as `?`).
-    #[inline(never)]
     fn put_str(&mut self, s: &str) -> Result<(), Overflow> {
         self.put_ascii(s.as_bytes())
     }
-    #[inline(never)]
     fn put_byte(&mut self, b: u8) -> Result<(), Overflow> {
         let slot = self.buf.get_mut(self.len).ok_or(Overflow)?;
         *slot = if b.is_ascii() { b } else { b'?' };
         self.len = self.len.saturating_add(1); // < N before
         Ok(())
     }
-    /// One loop: a fast path for ASCII that fits (a word-wise check and a
-    /// plain copy) was 224 B more code for ~360 fewer instructions per
-    /// telemetry row.
-    #[inline(never)]
     fn put_ascii(&mut self, bytes: &[u8]) -> Result<(), Overflow> {
         let free = self.buf.get_mut(self.len..).unwrap_or(&mut []);
         let n = bytes.len().min(free.len());

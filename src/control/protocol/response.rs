@@ -3,9 +3,10 @@
 //! telemetry directly.
 
 use super::command::{format_command, q8_to_centi, Command, ParseError};
-use super::number::{push_str, push_text, put_template, TextOut};
+use super::number::{push_fixed, push_fixed_parts, push_i32, push_str, push_text, push_u32, TextOut};
 use super::telemetry::{motion_word, FaultCounters};
 use super::Overflow;
+use crate::model::compass::{CalibrationError, MagCalibration};
 use crate::model::{Motion, Pose, ServoCmd, Trim};
 
 /// Prefix of an accepted command's echo.
@@ -82,7 +83,6 @@ pub struct Status {
 /// heading_deg=90.000 left_cmd=107.00 right_cmd=61.00 trim_left=0.00 trim_right=-1.50 rate_hz=10
 /// front=ok right=ok compass=down faults=0/0/0/0/0/0` (one line; `left_ms` only for timed
 /// commands; faults in telemetry column order). Fits in [`super::MAX_OUT_LINE`].
-#[inline(never)]
 pub fn format_status(s: &Status, out: &mut dyn TextOut) -> Result<(), Overflow> {
     let (v, w) = match s.motion {
         Motion::Stop => (0, 0),
@@ -92,40 +92,52 @@ pub fn format_status(s: &Status, out: &mut dyn TextOut) -> Result<(), Overflow> 
     // at most MODE_MAX bytes of the mode word (it may be any &str)
     let mode = s.mode.get(..s.mode.len().min(MODE_MAX)).unwrap_or("?");
     let motion = motion_word(s.motion.kind());
-    // signed values as their i32's bits (codes a..d)
-    put_template(
-        out,
-        "# status t_ms=%0 mode=%s motion=%s v_mps=%d w_radps=%d",
-        &[s.t_ms, v as u32, w as u32],
-        &[mode, motion],
-    )?;
+    push_str(out, "# status t_ms=")?;
+    push_u32(out, s.t_ms)?;
+    push_str(out, " mode=")?;
+    push_text(out, mode)?;
+    push_str(out, " motion=")?;
+    push_str(out, motion)?;
+    push_str(out, " v_mps=")?;
+    push_fixed(out, v, 3)?;
+    push_str(out, " w_radps=")?;
+    push_fixed(out, w, 3)?;
     if let Some(ms) = s.remaining_ms {
-        put_template(out, " left_ms=%0", &[ms], &[])?;
+        push_str(out, " left_ms=")?;
+        push_u32(out, ms)?;
     }
+    push_str(out, " x_mm=")?;
+    push_i32(out, s.pose.x.to_length().to_mm())?;
+    push_str(out, " y_mm=")?;
+    push_i32(out, s.pose.y.to_length().to_mm())?;
+    push_str(out, " heading_deg=")?;
+    push_fixed_parts(out, false, s.pose.theta.to_millidegrees(), 3)?;
+    push_str(out, " left_cmd=")?;
+    push_fixed_parts(out, false, s.left_cmd.to_centi(), 2)?;
+    push_str(out, " right_cmd=")?;
+    push_fixed_parts(out, false, s.right_cmd.to_centi(), 2)?;
+    push_str(out, " trim_left=")?;
+    push_fixed(out, q8_to_centi(i32::from(s.left_trim.0)), 2)?;
+    push_str(out, " trim_right=")?;
+    push_fixed(out, q8_to_centi(i32::from(s.right_trim.0)), 2)?;
+    push_str(out, " rate_hz=")?;
+    push_u32(out, u32::from(s.rate_hz))?;
     let up = |ok: bool| if ok { "ok" } else { "down" };
+    push_str(out, " front=")?;
+    push_str(out, up(s.front_ok))?;
+    push_str(out, " right=")?;
+    push_str(out, up(s.right_ok))?;
+    push_str(out, " compass=")?;
+    push_str(out, up(s.compass_ok))?;
+    push_str(out, " faults=")?;
     let f = &s.faults;
-    put_template(
-        out,
-        " x_mm=%a y_mm=%a heading_deg=%3 left_cmd=%2 right_cmd=%2 trim_left=%c trim_right=%c rate_hz=%0 \
-front=%s right=%s compass=%s faults=%0/%0/%0/%0/%0/%0",
-        &[
-            s.pose.x.to_length().to_mm() as u32,
-            s.pose.y.to_length().to_mm() as u32,
-            s.pose.theta.to_millidegrees(),
-            s.left_cmd.to_centi(),
-            s.right_cmd.to_centi(),
-            q8_to_centi(i32::from(s.left_trim.0)) as u32,
-            q8_to_centi(i32::from(s.right_trim.0)) as u32,
-            u32::from(s.rate_hz),
-            f.bus,
-            f.timeout,
-            f.missing,
-            f.bad_sample,
-            f.rejected_outliers,
-            f.overruns,
-        ],
-        &[up(s.front_ok), up(s.right_ok), up(s.compass_ok)],
-    )
+    for (i, n) in [f.bus, f.timeout, f.missing, f.bad_sample, f.rejected_outliers, f.overruns].into_iter().enumerate() {
+        if i > 0 {
+            push_str(out, "/")?;
+        }
+        push_u32(out, n)?;
+    }
+    Ok(())
 }
 
 /// The `help` answer, one line each (ranges as in `config::serial`; a test
@@ -144,3 +156,106 @@ pub const HELP: &[&str] = &[
     "#  status | help",
     "# telemetry: CSV rows after a header line; lines starting with # are not telemetry",
 ];
+
+/// `|q16| * 10^6 / 2^16` rounded half up, saturating at `u32::MAX`, in 32
+/// bits: `10^6 / 2^16 = 15625 / 2^10`, and with `a = h 2^10 + l` that is
+/// `15625 h + ((15625 l + 2^9) >> 10)` (`15625 l + 2^9 < 2^24`).
+fn q16_to_micro(a: u32) -> u32 {
+    const H_MAX: u32 = u32::MAX / 15_625; // const-evaluated
+    let (h, l) = (a >> 10, a & 0x3FF);
+    if h > H_MAX {
+        return u32::MAX;
+    }
+    // h <= H_MAX: 15625 h fits
+    h.wrapping_mul(15_625).saturating_add(l.wrapping_mul(15_625).wrapping_add(1 << 9) >> 10)
+}
+
+/// The answer line to a calibration sweep's end: `# ...` for a result (or
+/// an abandoned sweep), `# err ...` (the protocol's `ERR`) for a failure.
+/// `tests/control.rs` pins the lines.
+pub fn format_calibration_report(
+    t: &mut dyn TextOut,
+    result: Option<Result<MagCalibration, CalibrationError>>,
+    samples: u16,
+    sectors: u8,
+) -> Result<(), Overflow> {
+    match result {
+        None => {
+            push_str(t, "# calibration abandoned after ")?;
+            push_u32(t, u32::from(samples))?;
+            push_str(t, " samples")
+        }
+        Some(Ok(_)) => {
+            push_str(t, "# calibration ok: ")?;
+            push_u32(t, u32::from(samples))?;
+            push_str(t, " samples, ")?;
+            push_u32(t, u32::from(sectors))?;
+            push_str(t, " of 12 sectors; applied. For config::compass:")
+        }
+        Some(Err(CalibrationError::NotEnoughSamples { have, need })) => {
+            push_str(t, "# err calibration timed out: ")?;
+            push_u32(t, u32::from(have))?;
+            push_str(t, " of ")?;
+            push_u32(t, u32::from(need))?;
+            push_str(t, " samples")
+        }
+        Some(Err(CalibrationError::SweepIncomplete { sectors, need })) => {
+            push_str(t, "# err calibration failed: the turn covered ")?;
+            push_u32(t, u32::from(sectors))?;
+            push_str(t, " of 12 sectors, need ")?;
+            push_u32(t, u32::from(need))
+        }
+        Some(Err(CalibrationError::Degenerate { axis })) => {
+            push_str(t, "# err calibration failed: magnetometer axis ")?;
+            push_u32(t, u32::from(axis))?;
+            push_str(t, " never changed")
+        }
+    }
+}
+
+/// The `CALIBRATION` line of `config::compass` for `cal`, ready to paste
+/// (the same text as `model::compass::ConfigLine`, written without
+/// `core::fmt`): biases as integers, scales with six decimals.
+pub fn format_config_line(out: &mut dyn TextOut, cal: &MagCalibration) -> Result<(), Overflow> {
+    push_str(out, "pub const CALIBRATION: MagCalibration = MagCalibration::from_f64([")?;
+    for (i, b) in cal.bias.into_iter().enumerate() {
+        if i > 0 {
+            push_str(out, ", ")?;
+        }
+        push_i32(out, b)?;
+        push_str(out, ".0")?;
+    }
+    push_str(out, "], [")?;
+    for (i, q16) in cal.scale_q16.into_iter().enumerate() {
+        if i > 0 {
+            push_str(out, ", ")?;
+        }
+        // q16 * 10^6 / 2^16 rounded half away from zero (as math::div_round):
+        // the sign as text, as a magnitude may pass i32::MAX (and |q16| >= 1
+        // gives at least 15 millionths: no "-0")
+        push_fixed_parts(out, q16 < 0, q16_to_micro(q16.unsigned_abs()), 6)?;
+    }
+    push_str(out, "]);")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::q16_to_micro;
+
+    #[test]
+    fn q16_to_micro_rounds_half_up_and_saturates() {
+        let mut a: u32 = 0;
+        loop {
+            let want = ((u64::from(a) * 1_000_000 + (1 << 15)) >> 16).min(u64::from(u32::MAX)) as u32;
+            assert_eq!(q16_to_micro(a), want, "{a}");
+            match a.checked_add(a / 1024 + 1) {
+                Some(n) => a = n,
+                None => break,
+            }
+        }
+        for a in (0..1 << 20).chain([u32::MAX, u32::MAX - 1, 1 << 31, 274_877, 274_878, 281_474_976]) {
+            let want = ((u64::from(a) * 1_000_000 + (1 << 15)) >> 16).min(u64::from(u32::MAX)) as u32;
+            assert_eq!(q16_to_micro(a), want, "{a}");
+        }
+    }
+}

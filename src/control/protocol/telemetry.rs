@@ -114,258 +114,139 @@ fn length_dmm(l: Length) -> i32 {
     h.wrapping_mul(10).wrapping_add(f.wrapping_mul(10).wrapping_add(1 << 15) >> 16)
 }
 
-/// A row as [`format_row`] writes it: one 32-bit cell per column (an
-/// `i32`'s bits in the [`SIGNED`] columns, 0 in the motion column), a mask
-/// of the empty columns (bit `i` for column `i`) and the motion.
-struct Cells {
-    v: [u32; COLUMNS],
-    empty: u32,
-    motion: MotionKind,
-}
-
-/// How [`Cells::write`] writes a column: the decimals in the low two bits,
-/// whether the cell's bits are an `i32`, or the motion word.
-const SIGNED: u8 = 4;
-const WORD: u8 = 8;
-/// Per column, in [`HEADER`] order.
-const FORMAT: [u8; COLUMNS] = [
-    0,          // t_ms
-    SIGNED | 1, // x_mm
-    SIGNED | 1, // y_mm
-    3,          // heading_deg
-    WORD,       // motion
-    SIGNED | 3, // v_mps
-    SIGNED | 3, // w_radps
-    2,          // left_cmd
-    2,          // right_cmd
-    0,          // front_raw_mm
-    SIGNED | 1, // front_mm
-    0,          // right_raw_mm
-    SIGNED | 1, // right_mm
-    SIGNED,     // mag_x
-    SIGNED,     // mag_y
-    SIGNED,     // mag_z
-    SIGNED,     // field_x
-    SIGNED,     // field_y
-    SIGNED,     // field_z
-    3,          // compass_deg
-    0,          // f_bus
-    0,          // f_timeout
-    0,          // f_missing
-    0,          // f_bad_sample
-    0,          // f_outliers
-    0,          // f_overruns
-];
-
-/// The first of the columns a reading fills (raw, then distance; raw x, y,
-/// z, field x, y, z, heading).
-const FRONT: u32 = 9;
-const RIGHT: u32 = 11;
-const COMPASS: u32 = 13;
-/// The first fault counter's column (`f_bus`; the others follow in
-/// [`FaultCounters`]' order).
-const FAULTS: u32 = 20;
-
-impl Cells {
-    /// The cells of `t` (the firmware's path: no [`TelemetryRow`] between).
-    fn of(t: &Telemetry) -> Cells {
+impl From<&Telemetry> for TelemetryRow {
+    fn from(t: &Telemetry) -> TelemetryRow {
         let (v_mm_s, w_mrad_s) = match t.motion {
             Motion::Stop => (0, 0),
             Motion::Straight(v) => (v.to_mm_s(), 0),
             Motion::Turn(w) => (0, w.to_mrad_s()),
         };
-        let mut empty = 0;
-        // raw reading and distance; a missing one leaves its columns empty
-        let mut lidar = |s: &Option<LidarSample>, column: u32| match s {
-            Some(LidarSample { raw_mm, range: Range::Target(d) }) => (u32::from(*raw_mm), length_dmm(*d) as u32),
-            Some(LidarSample { raw_mm, .. }) => {
-                empty |= 2 << column;
-                (u32::from(*raw_mm), 0)
-            }
-            None => {
-                empty |= 3 << column;
-                (0, 0)
-            }
+        // raw reading and distance (none without a target)
+        let lidar = |s: &Option<LidarSample>| match s {
+            Some(LidarSample { raw_mm, range: Range::Target(d) }) => (Some(*raw_mm), Some(length_dmm(*d))),
+            Some(LidarSample { raw_mm, .. }) => (Some(*raw_mm), None),
+            None => (None, None),
         };
-        let (front_raw, front) = lidar(&t.front, FRONT);
-        let (right_raw, right) = lidar(&t.right, RIGHT);
-        let c = match &t.compass {
-            Some(c) => *c,
-            None => {
-                empty |= 0x7F << COMPASS;
-                CompassSample {
-                    raw: crate::model::compass::MagCounts { x: 0, y: 0, z: 0 },
-                    field: crate::model::compass::MagField { x: 0, y: 0, z: 0 },
-                    heading: crate::math::Angle::ZERO,
-                }
-            }
-        };
-        let f = &t.faults;
-        let v = [
-            t.t_ms,
-            length_dmm(t.pose.x.to_length()) as u32,
-            length_dmm(t.pose.y.to_length()) as u32,
-            t.pose.theta.to_millidegrees(),
-            0,
-            v_mm_s as u32,
-            w_mrad_s as u32,
-            t.left_cmd.to_centi(),
-            t.right_cmd.to_centi(),
-            front_raw,
-            front,
-            right_raw,
-            right,
-            i32::from(c.raw.x) as u32,
-            i32::from(c.raw.y) as u32,
-            i32::from(c.raw.z) as u32,
-            c.field.x as u32,
-            c.field.y as u32,
-            c.field.z as u32,
-            c.heading.to_millidegrees(),
-            f.bus,
-            f.timeout,
-            f.missing,
-            f.bad_sample,
-            f.rejected_outliers,
-            f.overruns,
-        ];
-        Cells { v, empty, motion: t.motion.kind() }
-    }
-
-    /// Appends the cells as CSV (no terminator): one loop over the columns
-    /// and their [`FORMAT`], into a local buffer that goes out in a few
-    /// pieces rather than byte by byte.
-    #[inline(never)]
-    fn write(&self, out: &mut dyn TextOut) -> Result<(), Overflow> {
-        let mut row = Cursor::new();
-        for i in 0..COLUMNS {
-            let (Some(&v), Some(&format)) = (self.v.get(i), FORMAT.get(i)) else { break };
-            // the widest column is 13 bytes with its comma (a negative i32
-            // with decimals, e.g. -214748364.8): a piece goes out when fewer
-            // are left
-            if row.room() < 13 {
-                row.flush(out)?;
-                row.clear();
-            }
-            if i > 0 {
-                row.push(b',');
-            }
-            if self.empty >> i & 1 != 0 {
-                // an empty field
-            } else if format & WORD != 0 {
-                row.push_bytes(motion_word(self.motion).as_bytes());
-            } else {
-                let negative = format & SIGNED != 0 && (v as i32) < 0;
-                let magnitude = if negative { (v as i32).unsigned_abs() } else { v };
-                row.number(negative, magnitude, u32::from(format & 3));
-            }
-        }
-        row.flush(out)
-    }
-}
-
-impl From<&Telemetry> for TelemetryRow {
-    fn from(t: &Telemetry) -> TelemetryRow {
-        TelemetryRow::from_cells(&Cells::of(t))
-    }
-}
-
-impl TelemetryRow {
-    /// The row's cells (see [`Cells`]).
-    fn cells(&self) -> Cells {
-        let mut empty = 0;
-        // an Option's value, or 0 and its column marked empty
-        let mut cell = |v: Option<i32>, column: u32| {
-            v.map_or_else(
-                || {
-                    empty |= 1 << column;
-                    0
-                },
-                |v| v as u32,
-            )
-        };
-        let axis = |g: Option<[i32; 3]>, k: usize| g.and_then(|m| m.get(k).copied());
-        let (raw, field) = (self.mag_raw.map(|m| m.map(i32::from)), self.mag_field);
-        let f = &self.faults;
-        let v = [
-            self.t_ms,
-            self.x_dmm as u32,
-            self.y_dmm as u32,
-            self.heading_mdeg,
-            0,
-            self.v_mm_s as u32,
-            self.w_mrad_s as u32,
-            self.left_cmd_centi,
-            self.right_cmd_centi,
-            cell(self.front_raw_mm.map(i32::from), FRONT),
-            cell(self.front_dmm, FRONT + 1),
-            cell(self.right_raw_mm.map(i32::from), RIGHT),
-            cell(self.right_dmm, RIGHT + 1),
-            cell(axis(raw, 0), COMPASS),
-            cell(axis(raw, 1), COMPASS + 1),
-            cell(axis(raw, 2), COMPASS + 2),
-            cell(axis(field, 0), COMPASS + 3),
-            cell(axis(field, 1), COMPASS + 4),
-            cell(axis(field, 2), COMPASS + 5),
-            // a u32's bits (the column is unsigned)
-            cell(self.compass_mdeg.map(|d| d as i32), COMPASS + 6),
-            f.bus,
-            f.timeout,
-            f.missing,
-            f.bad_sample,
-            f.rejected_outliers,
-            f.overruns,
-        ];
-        Cells { v, empty, motion: self.motion }
-    }
-
-    /// The row that `cells` hold (the inverse of [`TelemetryRow::cells`];
-    /// a group of magnetometer axes is present when its first column is).
-    fn from_cells(c: &Cells) -> TelemetryRow {
-        let at = |i: u32| c.v.get(i as usize).copied().unwrap_or(0);
-        let opt = |i: u32| (c.empty >> i & 1 == 0).then(|| at(i) as i32);
-        let group = |i: u32| opt(i).map(|_| [at(i) as i32, at(i.wrapping_add(1)) as i32, at(i.wrapping_add(2)) as i32]);
+        let (front_raw_mm, front_dmm) = lidar(&t.front);
+        let (right_raw_mm, right_dmm) = lidar(&t.right);
         TelemetryRow {
-            t_ms: at(0),
-            x_dmm: at(1) as i32,
-            y_dmm: at(2) as i32,
-            heading_mdeg: at(3),
-            motion: c.motion,
-            v_mm_s: at(5) as i32,
-            w_mrad_s: at(6) as i32,
-            left_cmd_centi: at(7),
-            right_cmd_centi: at(8),
-            // a raw reading is a u16 (from a LidarSample)
-            front_raw_mm: opt(FRONT).map(|r| r as u16),
-            front_dmm: opt(FRONT + 1),
-            right_raw_mm: opt(RIGHT).map(|r| r as u16),
-            right_dmm: opt(RIGHT + 1),
-            // the raw axes are i16 (from MagCounts)
-            mag_raw: group(COMPASS).map(|m| m.map(|a| a as i16)),
-            mag_field: group(COMPASS + 3),
-            compass_mdeg: opt(COMPASS + 6).map(|d| d as u32),
-            faults: FaultCounters {
-                bus: at(FAULTS),
-                timeout: at(FAULTS + 1),
-                missing: at(FAULTS + 2),
-                bad_sample: at(FAULTS + 3),
-                rejected_outliers: at(FAULTS + 4),
-                overruns: at(FAULTS + 5),
-            },
+            t_ms: t.t_ms,
+            x_dmm: length_dmm(t.pose.x.to_length()),
+            y_dmm: length_dmm(t.pose.y.to_length()),
+            heading_mdeg: t.pose.theta.to_millidegrees(),
+            motion: t.motion.kind(),
+            v_mm_s,
+            w_mrad_s,
+            left_cmd_centi: t.left_cmd.to_centi(),
+            right_cmd_centi: t.right_cmd.to_centi(),
+            front_raw_mm,
+            front_dmm,
+            right_raw_mm,
+            right_dmm,
+            mag_raw: t.compass.map(|c| [c.raw.x, c.raw.y, c.raw.z]),
+            mag_field: t.compass.map(|c| [c.field.x, c.field.y, c.field.z]),
+            compass_mdeg: t.compass.map(|c| c.heading.to_millidegrees()),
+            faults: t.faults,
         }
     }
 }
 
-/// Appends one telemetry row (no terminator) for `t`. On [`Overflow`] the
-/// string holds a partial row: clear it. A `String<`[`MAX_ROW`]`>` always fits.
-pub fn format_telemetry(t: &Telemetry, out: &mut dyn TextOut) -> Result<(), Overflow> {
-    Cells::of(t).write(out)
+/// Writes the columns of a row, comma-separated, into a local buffer that
+/// goes out in a few pieces rather than number by number.
+struct Columns<'a> {
+    out: &'a mut dyn TextOut,
+    row: Cursor,
+    first: bool,
 }
 
-/// Appends a row's values as CSV (no terminator), as [`format_telemetry`]
-/// writes the telemetry it came from.
+impl Columns<'_> {
+    /// The widest column with its comma: a negative i32 with decimals, e.g.
+    /// `,-214748364.8`.
+    const WIDEST: usize = 13;
+
+    /// Starts the next column: hands the buffer out when the widest column
+    /// might not fit, then writes the comma.
+    fn next(&mut self) -> Result<(), Overflow> {
+        if self.row.room() < Self::WIDEST {
+            self.row.flush(self.out)?;
+            self.row.clear();
+        }
+        if !core::mem::replace(&mut self.first, false) {
+            self.row.push(b',');
+        }
+        Ok(())
+    }
+
+    /// An unsigned value with `decimals` decimals, or an empty field.
+    fn unsigned(&mut self, v: impl Into<Option<u32>>, decimals: u32) -> Result<(), Overflow> {
+        self.next()?;
+        if let Some(v) = v.into() {
+            self.row.number(false, v, decimals);
+        }
+        Ok(())
+    }
+
+    /// A signed value with `decimals` decimals, or an empty field.
+    fn signed(&mut self, v: impl Into<Option<i32>>, decimals: u32) -> Result<(), Overflow> {
+        self.next()?;
+        if let Some(v) = v.into() {
+            self.row.number(v < 0, v.unsigned_abs(), decimals);
+        }
+        Ok(())
+    }
+
+    /// Three integer columns (magnetometer axes x, y, z), or three empty fields.
+    fn axes(&mut self, axes: Option<[i32; 3]>) -> Result<(), Overflow> {
+        let [x, y, z] = axes.map_or([None; 3], |a| a.map(Some));
+        self.signed(x, 0)?;
+        self.signed(y, 0)?;
+        self.signed(z, 0)
+    }
+
+    fn word(&mut self, word: &str) -> Result<(), Overflow> {
+        self.next()?;
+        self.row.push_bytes(word.as_bytes());
+        Ok(())
+    }
+
+    /// Hands out what is left.
+    fn finish(self) -> Result<(), Overflow> {
+        self.row.flush(self.out)
+    }
+}
+
+/// Appends a row's values as CSV (no terminator), in [`HEADER`]'s order.
+/// On [`Overflow`] the buffer holds a partial row: clear it. A
+/// `String<`[`MAX_ROW`]`>` always fits.
 pub fn format_row(r: &TelemetryRow, out: &mut dyn TextOut) -> Result<(), Overflow> {
-    r.cells().write(out)
+    let mut c = Columns { out, row: Cursor::new(), first: true };
+    c.unsigned(r.t_ms, 0)?;
+    c.signed(r.x_dmm, 1)?;
+    c.signed(r.y_dmm, 1)?;
+    c.unsigned(r.heading_mdeg, 3)?;
+    c.word(motion_word(r.motion))?;
+    c.signed(r.v_mm_s, 3)?;
+    c.signed(r.w_mrad_s, 3)?;
+    c.unsigned(r.left_cmd_centi, 2)?;
+    c.unsigned(r.right_cmd_centi, 2)?;
+    c.unsigned(r.front_raw_mm.map(u32::from), 0)?;
+    c.signed(r.front_dmm, 1)?;
+    c.unsigned(r.right_raw_mm.map(u32::from), 0)?;
+    c.signed(r.right_dmm, 1)?;
+    c.axes(r.mag_raw.map(|m| m.map(i32::from)))?;
+    c.axes(r.mag_field)?;
+    c.unsigned(r.compass_mdeg, 3)?;
+    let f = &r.faults;
+    for count in [f.bus, f.timeout, f.missing, f.bad_sample, f.rejected_outliers, f.overruns] {
+        c.unsigned(count, 0)?;
+    }
+    c.finish()
+}
+
+/// Appends one telemetry row (no terminator) for `t`, as [`format_row`]
+/// writes its [`TelemetryRow`].
+pub fn format_telemetry(t: &Telemetry, out: &mut dyn TextOut) -> Result<(), Overflow> {
+    format_row(&TelemetryRow::from(t), out)
 }
 
 /// What kind of line came from the robot.

@@ -1,0 +1,43 @@
+//! What the loop is doing: idle, driving, raw servo commands, or a
+//! calibration sweep, each with its timer.
+
+use super::clock::Timer;
+use crate::model::{Drive, Motion, ServoCmd};
+
+/// What the loop is doing.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub enum Mode {
+    /// Stopped: servos at neutral.
+    Idle,
+    /// Driving a motion through the inverse actuator model (`drive` holds
+    /// the servo commands and the motion they make by the model).
+    Drive { drive: Drive, timer: Timer },
+    /// Raw servo commands; `motion` is what the forward model says they do.
+    Servo { left: ServoCmd, right: ServoCmd, motion: Motion, timer: Timer },
+    /// Turning in place while the magnetometer calibration collects samples.
+    Calibrate { drive: Drive, timer: Timer },
+}
+
+impl Mode {
+    /// The mode's word in `status`.
+    pub fn word(&self) -> &'static str {
+        match self {
+            Mode::Idle => "idle",
+            Mode::Drive { .. } => "drive",
+            Mode::Servo { .. } => "servo",
+            Mode::Calibrate { .. } => "cal",
+        }
+    }
+    pub(super) fn timer(&self) -> Option<&Timer> {
+        match self {
+            Mode::Idle => None,
+            Mode::Drive { timer, .. } | Mode::Servo { timer, .. } | Mode::Calibrate { timer, .. } => Some(timer),
+        }
+    }
+    pub(super) fn timer_mut(&mut self) -> Option<&mut Timer> {
+        match self {
+            Mode::Idle => None,
+            Mode::Drive { timer, .. } | Mode::Servo { timer, .. } | Mode::Calibrate { timer, .. } => Some(timer),
+        }
+    }
+}

@@ -1,0 +1,105 @@
+//! What the loop shows: its clock, pose, mode, counters and drivers, and
+//! the `status` answer.
+
+use super::clock::{whole_ms, Stamp};
+use super::{Controller, Mode, SensorHealth};
+use crate::control::protocol::number::div_rem_1000;
+use crate::control::protocol::{FaultCounters, Status};
+use crate::driver::{CompassSample, LidarSample};
+use crate::model::estimator::Estimator;
+use crate::model::{ActuatorModel, Drive, Pose};
+
+impl<F, R, C, S> Controller<F, R, C, S> {
+    /// Loop clock in ms (wraps after 49 days: the truncation is intended).
+    pub fn t_ms(&self) -> u32 {
+        whole_ms(self.clock_us)
+    }
+    /// Loop clock, us since the first tick.
+    pub fn clock_us(&self) -> u64 {
+        self.clock_us
+    }
+    /// The pose the telemetry reports: the estimator's.
+    pub fn pose(&self) -> Pose {
+        self.estimator.pose()
+    }
+    /// The dead-reckoned pose (the state update alone, from the last `pose`).
+    pub fn dead_reckoned(&self) -> Pose {
+        self.dead
+    }
+    pub fn estimator(&self) -> &Estimator {
+        &self.estimator
+    }
+    pub fn mode(&self) -> Mode {
+        self.mode
+    }
+    /// The servo commands and motion set at the last tick.
+    pub fn applied(&self) -> Drive {
+        self.applied
+    }
+    pub fn model(&self) -> &ActuatorModel {
+        &self.model
+    }
+    pub fn faults(&self) -> FaultCounters {
+        self.faults
+    }
+    pub fn telemetry_hz(&self) -> u16 {
+        self.telemetry_hz
+    }
+    pub fn ticks(&self) -> u64 {
+        self.ticks
+    }
+    pub fn front_health(&self) -> SensorHealth {
+        self.health_front
+    }
+    pub fn right_health(&self) -> SensorHealth {
+        self.health_right
+    }
+    pub fn compass_health(&self) -> SensorHealth {
+        self.health_compass
+    }
+    pub fn last_front(&self) -> Option<LidarSample> {
+        self.last_front
+    }
+    pub fn last_right(&self) -> Option<LidarSample> {
+        self.last_right
+    }
+    pub fn last_compass(&self) -> Option<CompassSample> {
+        self.last_compass
+    }
+    /// The drivers, e.g. for a simulator that reads the servo commands or
+    /// sets a fake chip's truth.
+    pub fn front(&mut self) -> &mut F {
+        &mut self.front
+    }
+    pub fn right(&mut self) -> &mut R {
+        &mut self.right
+    }
+    pub fn compass(&mut self) -> &mut C {
+        &mut self.compass
+    }
+    pub fn servos(&mut self) -> &mut S {
+        &mut self.servos
+    }
+
+    /// What `status` reports.
+    pub fn status(&self) -> Status {
+        let now = self.clock_us as Stamp;
+        let remaining_ms = self.mode.timer().and_then(|t| t.remaining_us(now)).map(|us| div_rem_1000(us).0);
+        Status {
+            t_ms: self.t_ms(),
+            mode: self.mode.word(),
+            motion: self.applied.motion,
+            remaining_ms,
+            pose: self.estimator.pose(),
+            left_cmd: self.applied.left,
+            right_cmd: self.applied.right,
+            left_trim: self.model.left_trim,
+            right_trim: self.model.right_trim,
+            rate_hz: self.telemetry_hz,
+            front_ok: self.health_front.up,
+            right_ok: self.health_right.up,
+            compass_ok: self.health_compass.up,
+            faults: self.faults,
+        }
+    }
+}
