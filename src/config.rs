@@ -164,6 +164,10 @@ pub mod compass {
 
     /// Calibration sweep: samples to collect while turning in place.
     pub const CALIBRATION_SAMPLES: u16 = 1000;
+    /// A sweep that has its samples but not its sectors keeps collecting up
+    /// to this many more: two turns at the calibration turn rate (the first
+    /// turn only builds the min/max box and counts about 9 sectors).
+    pub const CALIBRATION_EXTRA_SAMPLES: u16 = 500;
     /// A sweep must visit this many of 12 30-degree sectors to be accepted.
     pub const CALIBRATION_MIN_SECTORS: u8 = 11;
     /// A calibration sample only marks a sector if its horizontal field,

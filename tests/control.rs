@@ -610,7 +610,10 @@ fn calibration_turns_in_place_applies_and_prints_the_result() {
     assert_eq!(ctl.mode(), Mode::Idle);
     let lines = out.take();
     assert_eq!(lines.len(), 2, "{lines:?}");
-    assert!(lines[0].starts_with("# calibration ok: 300 samples, 12 of 12 sectors"), "{lines:?}");
+    assert_eq!(
+        lines[0],
+        "# calibration ok: 300 samples, 12 of 12 sectors; x and y measured, z kept from config; applied. For config::compass:"
+    );
     assert!(lines[1].starts_with("# pub const CALIBRATION: MagCalibration = MagCalibration::from_f64([79.0, 35.0, "));
     let cal = ctl.compass().calibration;
     assert_eq!(&cal.bias[..2], &[79, 35]);
@@ -626,7 +629,9 @@ fn calibration_without_a_turning_field_times_out_and_stops() {
     ctl.compass().radius = 200.0; // a field that never turns
     send(&mut ctl, &mut out, "cal 250");
     out.take();
-    run(&mut ctl, &mut out, 0, 2500);
+    // short of sectors, the sweep keeps collecting up to its cap
+    let cap = u32::from(250 + config::compass::CALIBRATION_EXTRA_SAMPLES);
+    run(&mut ctl, &mut out, 0, 10 * cap);
     let lines = out.take();
     assert_eq!(lines, ["# err calibration failed: the turn covered 0 of 12 sectors, need 11"]);
     assert_eq!(ctl.mode(), Mode::Idle);
@@ -636,10 +641,11 @@ fn calibration_without_a_turning_field_times_out_and_stops() {
     ctl.compass().radius = 0.0;
     send(&mut ctl, &mut out, "cal 250");
     out.take();
-    let limit = 250 * config::compass::CALIBRATION_MS_PER_SAMPLE;
-    run(&mut ctl, &mut out, 2500, 2500 + limit);
+    let limit = cap * config::compass::CALIBRATION_MS_PER_SAMPLE;
+    let t0 = 10 * cap;
+    run(&mut ctl, &mut out, t0, t0 + limit);
     assert_eq!(ctl.mode().word(), "cal");
-    ctl.tick((2500 + limit) * 1000, &mut out);
+    ctl.tick((t0 + limit) * 1000, &mut out);
     assert_eq!(ctl.mode(), Mode::Idle);
     let lines = out.take();
     assert!(lines.contains(&"# err calibration timed out: 0 of 250 samples".to_string()), "{lines:?}");

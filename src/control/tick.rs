@@ -402,16 +402,17 @@ where
                 self.dead = pose;
             }
             Command::Calibrate { samples } => {
-                self.calibrator = Some(MagCalibrator::new(
+                let calibrator = MagCalibrator::new(
                     self.compass.asa(),
                     config::compass::AXES,
                     samples,
                     config::compass::CALIBRATION_MIN_SECTORS,
                     config::compass::CALIBRATION_MIN_RADIUS,
-                ));
+                );
+                self.calibrator = Some(calibrator);
                 let turn = Motion::Turn(TurnRate::from_mrad_s(config::compass::CALIBRATION_TURN_MRAD_S));
-                // samples <= u16::MAX: the product fits in u32 (asserted at MAX_SPAN_MS)
-                let limit_ms = u32::from(samples) * config::compass::CALIBRATION_MS_PER_SAMPLE;
+                // max_samples <= u16::MAX: the product fits in u32 (asserted at MAX_SPAN_MS)
+                let limit_ms = u32::from(calibrator.max_samples()) * config::compass::CALIBRATION_MS_PER_SAMPLE;
                 self.mode = Mode::Calibrate { drive: self.model.drive(turn), timer: Timer::new(Some(limit_ms)) };
             }
             Command::Rate { hz } => {
@@ -951,6 +952,9 @@ fn q16_to_micro(a: u32) -> u32 {
     h.wrapping_mul(15_625).saturating_add(l.wrapping_mul(15_625).wrapping_add(1 << 9) >> 10)
 }
 
+// The report names z as the axis kept from the config.
+const _: () = assert!(config::compass::AXES.forward.index + config::compass::AXES.right.index == 1);
+
 /// The answer line to a calibration sweep's end: `# ...` for a result (or
 /// an abandoned sweep), `# err ...` (the protocol's `ERR`) for a failure.
 /// Each literal carries its prefix: one string per line is 92 bytes less
@@ -966,7 +970,7 @@ fn calibration_report(
         None => put_template(t, "# calibration abandoned after %0 samples", &[samples], &[]),
         Some(Ok(_)) => put_template(
             t,
-            "# calibration ok: %0 samples, %0 of 12 sectors; applied. For config::compass:",
+            "# calibration ok: %0 samples, %0 of 12 sectors; x and y measured, z kept from config; applied. For config::compass:",
             &[samples, u32::from(sectors)],
             &[],
         ),

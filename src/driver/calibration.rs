@@ -3,6 +3,17 @@
 //! maximum of each axis; then `bias = (max + min) / 2` and
 //! `scale = mean half-range / half-range` per axis.
 //!
+//! A turn in place on a flat floor only sweeps the field through the
+//! forward and right axes; the vertical one barely changes, so its bias and
+//! scale cannot be observed. The sweep measures the two horizontal axes and
+//! keeps the vertical axis's bias and scale from
+//! [`config::compass::CALIBRATION`]. The mean half-range counts the vertical
+//! axis with the half-range its kept scale implies, so the scales keep the
+//! report's proportion (`1/s_f + 1/s_r + 1/s_v = 3`): with `r` the ranges,
+//! `R = (r_f + r_r) s_v / (3 s_v - 1)` and `s_i = R / r_i`. (The heading
+//! uses only the ratio of the horizontal scales; this keeps the scales'
+//! level comparable with the config's.)
+//!
 //! [`MagCalibrator`] is an incremental state machine: the control loop feeds
 //! it one raw sample at a time during a turn (no buffer, no float, no
 //! allocation) and asks for the [`result`](MagCalibrator::result) at the
@@ -13,9 +24,10 @@
 //! sectors (a robot that turned half a circle, or not at all, gives a box
 //! that is not the field's). The centre only settles once the turn has
 //! passed every extreme, so the first turn counts about 9 sectors: a sweep
-//! must be longer than one turn (the configured 1000 samples at 100 Hz are
-//! 3.5 to 5 turns at the robot's 2.2 to 3.2 rad/s). [`ConfigLine`] prints
-//! the result as a line to paste into `src/config.rs`.
+//! that has its samples but not its sectors keeps collecting, up to
+//! [`config::compass::CALIBRATION_EXTRA_SAMPLES`] more (so `cal 250`, one
+//! turn's samples, ends within about two turns). [`ConfigLine`] prints the
+//! result as a line to paste into `src/config.rs`.
 
 use core::fmt;
 
@@ -43,7 +55,8 @@ pub enum CalibrationError {
 pub enum CalStatus {
     /// Still collecting: samples so far.
     Collecting(u16),
-    /// Enough samples; call [`MagCalibrator::result`].
+    /// Enough samples and sectors, or no more samples allowed; call
+    /// [`MagCalibrator::result`].
     Done,
 }
 
@@ -53,6 +66,8 @@ pub struct MagCalibrator {
     asa: [u8; 3],
     axes: AxisMap,
     need_samples: u16,
+    /// The most samples the sweep takes while it lacks sectors.
+    max_samples: u16,
     need_sectors: u8,
     min_radius: i32,
     count: u16,
@@ -73,6 +88,7 @@ impl MagCalibrator {
             asa,
             axes,
             need_samples: samples,
+            max_samples: samples.saturating_add(config::compass::CALIBRATION_EXTRA_SAMPLES),
             need_sectors: min_sectors,
             min_radius,
             count: 0,
@@ -96,7 +112,7 @@ impl MagCalibrator {
     /// Feeds one raw sample (chip axes, as read). Samples after the sweep
     /// is complete are ignored.
     pub fn feed(&mut self, raw: MagCounts) -> CalStatus {
-        if self.count >= self.need_samples {
+        if self.is_done() {
             return CalStatus::Done;
         }
         let adj = [
@@ -110,11 +126,16 @@ impl MagCalibrator {
         }
         self.count = self.count.saturating_add(1);
         self.visit(&adj);
-        if self.count >= self.need_samples {
+        if self.is_done() {
             CalStatus::Done
         } else {
             CalStatus::Collecting(self.count)
         }
+    }
+
+    /// The sweep has its samples and sectors, or all the samples it may take.
+    fn is_done(&self) -> bool {
+        (self.count >= self.need_samples && self.sectors() >= self.need_sectors) || self.count >= self.max_samples
     }
 
     /// Marks the sector of the horizontal vector from the box's centre.
@@ -137,9 +158,21 @@ impl MagCalibrator {
         self.sectors |= 1u16.checked_shl(sector).unwrap_or(0);
     }
 
-    /// Samples fed so far (up to the sweep's size).
+    /// Samples fed so far (up to [`max_samples`](Self::max_samples)).
     pub fn samples(&self) -> u16 {
         self.count
+    }
+
+    /// The most samples the sweep takes: the asked number plus
+    /// [`config::compass::CALIBRATION_EXTRA_SAMPLES`] while sectors are missing.
+    pub fn max_samples(&self) -> u16 {
+        self.max_samples
+    }
+
+    /// The vertical axis (chip index): the one neither forward nor right.
+    pub fn vertical(&self) -> usize {
+        // forward and right are distinct indices 0..=2: their sum is 1..=3
+        3usize.saturating_sub(usize::from(self.axes.forward.index)).saturating_sub(usize::from(self.axes.right.index))
     }
 
     /// Sectors visited so far.
@@ -152,7 +185,9 @@ impl MagCalibrator {
         (self.min, self.max)
     }
 
-    /// The new calibration, if the sweep is complete and covers the circle.
+    /// The new calibration, if the sweep is complete and covers the circle:
+    /// the forward and right axes measured, the vertical one kept from
+    /// [`config::compass::CALIBRATION`] (see the module docs).
     pub fn result(&self) -> Result<MagCalibration, CalibrationError> {
         if self.count < self.need_samples {
             return Err(CalibrationError::NotEnoughSamples { have: self.count, need: self.need_samples });
@@ -160,28 +195,42 @@ impl MagCalibrator {
         if self.sectors() < self.need_sectors {
             return Err(CalibrationError::SweepIncomplete { sectors: self.sectors(), need: self.need_sectors });
         }
-        let mut bias = [0i32; 3];
-        let mut range = [0i32; 3];
-        for (i, ((lo, hi), (b, r))) in
-            self.min.iter().zip(self.max.iter()).zip(bias.iter_mut().zip(range.iter_mut())).enumerate()
-        {
+        let kept = config::compass::CALIBRATION;
+        let v = self.vertical();
+        let mut bias = kept.bias;
+        let mut scale_q16 = kept.scale_q16;
+        let mut range = [0i64; 3];
+        for i in [usize::from(self.axes.forward.index), usize::from(self.axes.right.index)] {
+            let degenerate = CalibrationError::Degenerate { axis: i as u8 };
+            let (Some(&lo), Some(&hi)) = (self.min.get(i), self.max.get(i)) else { return Err(degenerate) };
             // lo <= hi, both |.| < 2^17: 32-bit sums and differences.
-            *r = hi.saturating_sub(*lo);
-            if *r <= 0 {
-                return Err(CalibrationError::Degenerate { axis: i as u8 });
+            let r = hi.saturating_sub(lo);
+            if r <= 0 {
+                return Err(degenerate);
             }
             // (hi + lo) / 2, halves away from zero (`/ 2` truncates toward zero)
-            let s = hi.saturating_add(*lo);
+            let s = hi.saturating_add(lo);
+            let (Some(b), Some(ri)) = (bias.get_mut(i), range.get_mut(i)) else { return Err(degenerate) };
             *b = s.saturating_add(if s < 0 { -1 } else { 1 }) / 2;
+            *ri = i64::from(r);
         }
-        // scale_i = (sum / 3) / range_i = sum / (3 range_i), in Q16: sum < 2^20,
-        // so sum 2^16 needs 64 bits.
-        let sum = i64::from(range.iter().fold(0i32, |a, &r| a.saturating_add(r)));
-        let mut scale_q16 = [0i32; 3];
-        for (i, (s, r)) in scale_q16.iter_mut().zip(range.iter()).enumerate() {
-            let q = div_round(sum << 16, i64::from(r.saturating_mul(3)))
-                .ok_or(CalibrationError::Degenerate { axis: i as u8 })?;
-            *s = i32::try_from(q).map_err(|_| CalibrationError::Degenerate { axis: i as u8 })?;
+        // s_i = (r_f + r_r) s_v / ((3 s_v - 1) r_i), in Q16:
+        // (r_f + r_r) sv_q16 2^16 / ((3 sv_q16 - 2^16) r_i). Ranges < 2^18;
+        // a kept scale below 2^26 (1024) keeps the numerator under 2^61, and
+        // one at or below 1/3 leaves no half-range for the horizontal axes.
+        let kept_error = CalibrationError::Degenerate { axis: v as u8 };
+        let sv = i64::from(kept.scale_q16.get(v).copied().ok_or(kept_error)?);
+        if !(65_536 / 3 < sv && sv < 1 << 26) {
+            return Err(kept_error);
+        }
+        let sum = range.iter().fold(0i64, |a, &r| a.saturating_add(r));
+        let num = sum.saturating_mul(sv) << 16;
+        let den_v = sv.saturating_mul(3).saturating_sub(65_536);
+        for i in [usize::from(self.axes.forward.index), usize::from(self.axes.right.index)] {
+            let degenerate = CalibrationError::Degenerate { axis: i as u8 };
+            let r = range.get(i).copied().ok_or(degenerate)?;
+            let q = div_round(num, den_v.saturating_mul(r)).ok_or(degenerate)?;
+            *scale_q16.get_mut(i).ok_or(degenerate)? = i32::try_from(q).map_err(|_| degenerate)?;
         }
         Ok(MagCalibration { bias, scale_q16 })
     }
