@@ -953,7 +953,7 @@ fn q16_to_micro(a: u32) -> u32 {
 }
 
 // The report names z as the axis kept from the config.
-const _: () = assert!(config::compass::AXES.forward.index + config::compass::AXES.right.index == 1);
+const _: () = assert!(crate::driver::calibration::VERTICAL == 2);
 
 /// The answer line to a calibration sweep's end: `# ...` for a result (or
 /// an abandoned sweep), `# err ...` (the protocol's `ERR`) for a failure.

@@ -38,6 +38,21 @@ use crate::model::compass::{apply_asa, AxisMap, MagCalibration, MagCounts};
 /// Number of sectors the circle is cut into (30 degrees each).
 pub const SECTORS: u8 = 12;
 
+/// The axis a turn on a flat floor cannot observe (chip index): the one
+/// neither forward nor right in [`config::compass::AXES`]. Its bias and
+/// scale are kept from [`config::compass::CALIBRATION`].
+pub const VERTICAL: usize = 3 - (config::compass::AXES.forward.index + config::compass::AXES.right.index) as usize;
+
+/// `s_v / (3 s_v - 1)` in Q24 for the kept vertical scale `s_v`: the mean
+/// half-range as a share of the two measured ones' sum (module docs).
+const KEPT_SHARE_Q24: i64 = {
+    let sv = config::compass::CALIBRATION.scale_q16[VERTICAL] as i64;
+    // a kept scale at or below 1/3 leaves no half-range for the horizontal
+    // axes; from 1/2 up the share is at most 1 (2^24 in Q24)
+    assert!(2 * sv >= 65_536);
+    (sv << 24) / (3 * sv - 65_536)
+};
+
 /// Why a sweep was rejected.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
 pub enum CalibrationError {
@@ -110,7 +125,8 @@ impl MagCalibrator {
     }
 
     /// Feeds one raw sample (chip axes, as read). Samples after the sweep
-    /// is complete are ignored.
+    /// is complete are ignored. The sweep is complete with its samples and
+    /// sectors, or at [`max_samples`](Self::max_samples).
     pub fn feed(&mut self, raw: MagCounts) -> CalStatus {
         if self.is_done() {
             return CalStatus::Done;
@@ -169,12 +185,6 @@ impl MagCalibrator {
         self.max_samples
     }
 
-    /// The vertical axis (chip index): the one neither forward nor right.
-    pub fn vertical(&self) -> usize {
-        // forward and right are distinct indices 0..=2: their sum is 1..=3
-        3usize.saturating_sub(usize::from(self.axes.forward.index)).saturating_sub(usize::from(self.axes.right.index))
-    }
-
     /// Sectors visited so far.
     pub fn sectors(&self) -> u8 {
         self.sectors.count_ones() as u8
@@ -186,7 +196,7 @@ impl MagCalibrator {
     }
 
     /// The new calibration, if the sweep is complete and covers the circle:
-    /// the forward and right axes measured, the vertical one kept from
+    /// the forward and right axes measured, the [`VERTICAL`] one kept from
     /// [`config::compass::CALIBRATION`] (see the module docs).
     pub fn result(&self) -> Result<MagCalibration, CalibrationError> {
         if self.count < self.need_samples {
@@ -195,44 +205,35 @@ impl MagCalibrator {
         if self.sectors() < self.need_sectors {
             return Err(CalibrationError::SweepIncomplete { sectors: self.sectors(), need: self.need_sectors });
         }
-        let kept = config::compass::CALIBRATION;
-        let v = self.vertical();
-        let mut bias = kept.bias;
-        let mut scale_q16 = kept.scale_q16;
-        let mut range = [0i64; 3];
-        for i in [usize::from(self.axes.forward.index), usize::from(self.axes.right.index)] {
-            let degenerate = CalibrationError::Degenerate { axis: i as u8 };
-            let (Some(&lo), Some(&hi)) = (self.min.get(i), self.max.get(i)) else { return Err(degenerate) };
+        let mut cal = config::compass::CALIBRATION;
+        let mut range = [0i32; 3];
+        let mut sum = 0i32;
+        for (i, ((lo, hi), (b, r))) in
+            self.min.iter().zip(self.max.iter()).zip(cal.bias.iter_mut().zip(range.iter_mut())).enumerate()
+        {
+            if i == VERTICAL {
+                continue;
+            }
             // lo <= hi, both |.| < 2^17: 32-bit sums and differences.
-            let r = hi.saturating_sub(lo);
-            if r <= 0 {
-                return Err(degenerate);
+            *r = hi.saturating_sub(*lo);
+            if *r <= 0 {
+                return Err(CalibrationError::Degenerate { axis: i as u8 });
             }
             // (hi + lo) / 2, halves away from zero (`/ 2` truncates toward zero)
-            let s = hi.saturating_add(lo);
-            let (Some(b), Some(ri)) = (bias.get_mut(i), range.get_mut(i)) else { return Err(degenerate) };
+            let s = hi.saturating_add(*lo);
             *b = s.saturating_add(if s < 0 { -1 } else { 1 }) / 2;
-            *ri = i64::from(r);
+            sum = sum.saturating_add(*r);
         }
-        // s_i = (r_f + r_r) s_v / ((3 s_v - 1) r_i), in Q16:
-        // (r_f + r_r) sv_q16 2^16 / ((3 sv_q16 - 2^16) r_i). Ranges < 2^18;
-        // a kept scale below 2^26 (1024) keeps the numerator under 2^61, and
-        // one at or below 1/3 leaves no half-range for the horizontal axes.
-        let kept_error = CalibrationError::Degenerate { axis: v as u8 };
-        let sv = i64::from(kept.scale_q16.get(v).copied().ok_or(kept_error)?);
-        if !(65_536 / 3 < sv && sv < 1 << 26) {
-            return Err(kept_error);
+        // s_i = (r_f + r_r) share / r_i in Q16: sum < 2^19, share <= 2^24
+        let num = i64::from(sum).saturating_mul(KEPT_SHARE_Q24);
+        for (i, (s, r)) in cal.scale_q16.iter_mut().zip(range).enumerate() {
+            if i == VERTICAL {
+                continue;
+            }
+            let q = div_round(num, i64::from(r) << 8).ok_or(CalibrationError::Degenerate { axis: i as u8 })?;
+            *s = i32::try_from(q).map_err(|_| CalibrationError::Degenerate { axis: i as u8 })?;
         }
-        let sum = range.iter().fold(0i64, |a, &r| a.saturating_add(r));
-        let num = sum.saturating_mul(sv) << 16;
-        let den_v = sv.saturating_mul(3).saturating_sub(65_536);
-        for i in [usize::from(self.axes.forward.index), usize::from(self.axes.right.index)] {
-            let degenerate = CalibrationError::Degenerate { axis: i as u8 };
-            let r = range.get(i).copied().ok_or(degenerate)?;
-            let q = div_round(num, den_v.saturating_mul(r)).ok_or(degenerate)?;
-            *scale_q16.get_mut(i).ok_or(degenerate)? = i32::try_from(q).map_err(|_| degenerate)?;
-        }
-        Ok(MagCalibration { bias, scale_q16 })
+        Ok(cal)
     }
 }
 
