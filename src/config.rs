@@ -286,8 +286,11 @@ pub mod serial {
     pub const BAUD: u32 = 115_200;
 
     // The command protocol's limits (`control::protocol`). Each guards against
-    // typos and line noise; the actuator model still clamps every request to
-    // the measured range.
+    // typos and line noise. The speed and rate limits are not what the servos
+    // drive: that differs by direction and moves with the trims (no trim:
+    // fwd 0.124..0.150 m/s, back 0.108..0.154, cw 2.377..3.300 rad/s, ccw
+    // 2.353..3.169, from the fitted lines in `actuators`), so the control loop
+    // drives a request outside it at the nearest it can and answers with that.
 
     /// Longest command line, bytes, without the terminator: the longest
     /// command (`servo 180.00 180.00 60.000`) is 26 bytes; 64 leaves room for

@@ -688,3 +688,60 @@ fn the_estimator_corrects_the_pose_with_fresh_readings_dead_reckoning_does_not()
     send(&mut ctl, &mut out, "pose 100 100 0");
     assert_eq!(ctl.pose(), ctl.dead_reckoned());
 }
+
+/// A motion the servos cannot drive as asked is driven at the nearest they
+/// can, and its one answer says what is driven: `fwd 0.05` (below the
+/// slowest forward speed) answers `# ok fwd <the slowest>`, not the request
+/// and a note. A motion inside the range is answered as asked.
+#[test]
+fn a_motion_outside_the_servos_range_is_answered_with_what_is_driven() {
+    let model = config::actuators::MODEL;
+    let number = |line: &str, prefix: &str| -> f64 {
+        line.strip_prefix(prefix).unwrap_or_else(|| panic!("{line}")).parse().unwrap()
+    };
+    for (command, prefix, request) in [
+        ("fwd 0.05", "# ok fwd ", Motion::Straight(Speed::from_mm_s(50))),
+        ("fwd 0.3", "# ok fwd ", Motion::Straight(Speed::from_mm_s(300))),
+        ("back 0.001", "# ok back ", Motion::Straight(Speed::from_mm_s(-1))),
+        ("cw 6", "# ok cw ", Motion::Turn(paperbot::math::TurnRate::from_mrad_s(6000))),
+        ("ccw 0.5", "# ok ccw ", Motion::Turn(paperbot::math::TurnRate::from_mrad_s(-500))),
+    ] {
+        let drive = model.drive(request);
+        assert!(drive.saturated, "{command} is outside the measured range");
+        let (mut ctl, mut out) = setup();
+        send(&mut ctl, &mut out, command);
+        let lines = out.take();
+        assert_eq!(lines.len(), 1, "one answer: {lines:?}");
+        let driven = match drive.motion {
+            Motion::Straight(v) => v.to_mps_f64().abs(),
+            Motion::Turn(w) => f64::from(w.to_mrad_s().abs()) / 1000.0,
+            Motion::Stop => panic!("{command}"),
+        };
+        assert!((number(&lines[0], prefix) - driven).abs() <= 0.0005, "{command}: {lines:?}, driven {driven}");
+        ctl.tick(0, &mut out);
+        assert_eq!(servos(&mut ctl), (drive.left, drive.right), "{command}");
+    }
+    let (mut ctl, mut out) = setup();
+    send(&mut ctl, &mut out, "fwd 0.13");
+    assert_eq!(out.take(), ["# ok fwd 0.130"]);
+}
+
+/// The ranges the README and `config::serial` give for what the servos
+/// drive with no trim: each end is what a request past it is answered with.
+#[test]
+fn the_documented_drivable_ranges_are_the_models() {
+    for (command, answer) in [
+        ("fwd 0.001", "# ok fwd 0.124"),
+        ("fwd 0.3", "# ok fwd 0.150"),
+        ("back 0.001", "# ok back 0.108"),
+        ("back 0.3", "# ok back 0.154"),
+        ("cw 0.001", "# ok cw 2.377"),
+        ("cw 6", "# ok cw 3.300"),
+        ("ccw 0.001", "# ok ccw 2.353"),
+        ("ccw 6", "# ok ccw 3.169"),
+    ] {
+        let (mut ctl, mut out) = setup();
+        send(&mut ctl, &mut out, command);
+        assert_eq!(out.take(), [answer], "{command}");
+    }
+}

@@ -48,11 +48,14 @@
 //!
 //! Every line gets one answer line: `# ok <canonical command>` (the command
 //! as understood, every number at its resolution; parsing it gives the same
-//! command) or `# err <problem>`. A refused line changes nothing.
+//! command) or `# err <problem>`. A refused line changes nothing. The speed
+//! and rate limits guard against typos; a motion the servos cannot drive as
+//! asked is answered by the control loop with the motion they drive
+//! ([`crate::control::Controller::handle`]).
 //!
 //! ```text
 //! > fwd 0.13 2.5            # ok fwd 0.130 2.500
-//! > BACK .1                 # ok back 0.100
+//! > BACK .12                # ok back 0.120
 //! > ccw 2.5 1s              # ok ccw 2.500 1.000
 //! > servo 107 61.5 0.8      # ok servo 107.00 61.50 0.800
 //! > trim r -1.25            # ok trim right -1.25

@@ -357,7 +357,8 @@ where
         }
     }
 
-    /// Carries out one parsed command (answers `# ok <command>` first).
+    /// Carries out one parsed command and answers `# ok <command>` (for a
+    /// motion the servos cannot drive as asked, the motion they drive).
     #[inline(never)]
     pub fn handle(&mut self, cmd: Command, sink: &mut impl LineSink) {
         self.command_seen = true;
@@ -366,14 +367,17 @@ where
         {
             self.end_calibration(None, sink);
         }
-        self.respond(&Response::Ok(&cmd), sink);
+        if !matches!(cmd, Command::Drive { .. }) {
+            self.respond(&Response::Ok(&cmd), sink);
+        }
         match cmd {
             Command::Drive { motion, duration_ms } => {
                 let drive = self.model.drive(motion);
                 self.mode = Mode::Drive { drive, timer: Timer::new(duration_ms) };
-                if drive.saturated {
-                    self.respond(&Response::Note("clamped to the measured range of the actuator model"), sink);
-                }
+                // a motion outside what the servos drive is driven at the
+                // nearest they can, and the answer says so: `fwd 0.05` -> `# ok fwd 0.124`
+                let driven = if drive.saturated { Command::Drive { motion: drive.motion, duration_ms } } else { cmd };
+                self.respond(&Response::Ok(&driven), sink);
             }
             Command::Stop => {
                 self.mode = Mode::Idle;
