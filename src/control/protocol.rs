@@ -115,8 +115,9 @@ pub const MAX_LINE: usize = crate::config::serial::MAX_LINE;
 /// `Err` (the longest is a `missing`/`bad` message, about 90 bytes).
 pub const MAX_RESPONSE: usize = 128;
 
-/// Longest status line from [`format_status`] (every field at its widest).
-pub const MAX_STATUS: usize = 384;
+/// Longest status line from [`format_status`] (every field at its widest:
+/// 394 bytes).
+pub const MAX_STATUS: usize = 400;
 
 /// A buffer of this size holds any line the protocol writes (telemetry row,
 /// response, status, help line).

@@ -80,8 +80,9 @@ pub struct Status {
 /// Appends the status line (no terminator), `key=value` pairs:
 /// `# status t_ms=1200 mode=drive motion=fwd v_mps=0.130 w_radps=0.000 left_ms=800 x_mm=12 y_mm=-3
 /// heading_deg=90.000 left_cmd=107.00 right_cmd=61.00 trim_left=0.00 trim_right=-1.50 rate_hz=10
-/// front=ok right=ok compass=down faults=0/0/0/0/0/0` (one line; `left_ms` only for timed
-/// commands; faults in telemetry column order). Fits in [`super::MAX_OUT_LINE`].
+/// front=ok right=ok compass=down f_bus=0 f_timeout=0 f_missing=0 f_bad_sample=0 f_outliers=0
+/// f_overruns=0` (one line; `left_ms` only for timed commands; the fault
+/// counters named as the telemetry columns). Fits in [`super::MAX_OUT_LINE`].
 #[inline(never)]
 pub fn format_status(s: &Status, out: &mut dyn TextOut) -> Result<(), Overflow> {
     let (v, w) = match s.motion {
@@ -107,7 +108,7 @@ pub fn format_status(s: &Status, out: &mut dyn TextOut) -> Result<(), Overflow> 
     put_template(
         out,
         " x_mm=%a y_mm=%a heading_deg=%3 left_cmd=%2 right_cmd=%2 trim_left=%c trim_right=%c rate_hz=%0 \
-front=%s right=%s compass=%s faults=%0/%0/%0/%0/%0/%0",
+front=%s right=%s compass=%s f_bus=%0 f_timeout=%0 f_missing=%0 f_bad_sample=%0 f_outliers=%0 f_overruns=%0",
         &[
             s.pose.x.to_length().to_mm() as u32,
             s.pose.y.to_length().to_mm() as u32,
