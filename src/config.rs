@@ -155,6 +155,10 @@ pub mod compass {
 
     /// Calibration sweep: samples to collect while turning in place.
     pub const CALIBRATION_SAMPLES: u16 = 1000;
+    /// A sweep that has its samples but not its sectors keeps collecting up
+    /// to this many more: two turns at the calibration turn rate (the first
+    /// turn only builds the min/max box and counts about 9 sectors).
+    pub const CALIBRATION_EXTRA_SAMPLES: u16 = 500;
     /// A sweep must visit this many of 12 30-degree sectors to be accepted.
     pub const CALIBRATION_MIN_SECTORS: u8 = 11;
     /// A calibration sample only marks a sector if its horizontal field,
@@ -273,8 +277,11 @@ pub mod serial {
     pub const BAUD: u32 = 115_200;
 
     // The command protocol's limits (`control::protocol`). Each guards against
-    // typos and line noise; the actuator model still clamps every request to
-    // the measured range.
+    // typos and line noise. The speed and rate limits are not what the servos
+    // drive: that differs by direction and moves with the trims (no trim:
+    // fwd 0.124..0.150 m/s, back 0.108..0.154, cw 2.377..3.300 rad/s, ccw
+    // 2.353..3.169, from the fitted lines in `actuators`), so the control loop
+    // drives a request outside it at the nearest it can and answers with that.
 
     /// Longest command line, bytes, without the terminator: the longest
     /// command (`servo 180.00 180.00 60.000`) is 26 bytes; 64 leaves room for

@@ -1,6 +1,8 @@
 //! The magnetometer calibration sweep: a synthetic turn through a field
 //! distorted by the report's hard and soft iron gives the report's numbers
-//! back; incomplete sweeps are rejected; the config line round-trips.
+//! back for the two horizontal axes and keeps z's from the config; a sweep
+//! short of sectors keeps collecting up to its cap; incomplete sweeps are
+//! rejected; the config line round-trips.
 
 use paperbot::config;
 use paperbot::model::compass::{CalStatus, CalibrationError, ConfigLine, MagCalibrator};
@@ -30,9 +32,10 @@ fn sweep(turns: f64, n: u16) -> MagCalibrator {
     for k in 0..n {
         let t = turns * std::f64::consts::TAU * f64::from(k) / f64::from(n);
         let status = cal.feed(sample(t));
-        let want =
-            if k + 1 >= config::compass::CALIBRATION_SAMPLES { CalStatus::Done } else { CalStatus::Collecting(k + 1) };
-        assert_eq!(status, want);
+        let done = (k + 1 >= config::compass::CALIBRATION_SAMPLES
+            && cal.sectors() >= config::compass::CALIBRATION_MIN_SECTORS)
+            || k + 1 >= cal.max_samples();
+        assert_eq!(status, if done { CalStatus::Done } else { CalStatus::Collecting(k + 1) }, "sample {k}");
     }
     cal
 }
@@ -42,8 +45,7 @@ fn the_first_turn_only_builds_the_box() {
     // Sectors are seen from the running centre of the min/max box, which
     // only settles once the turn has passed every extreme: over the first
     // turn the vector sweeps 90..360 degrees (9 sectors), so a sweep must
-    // be longer than one turn (1000 samples at 100 Hz are 3.5 to 5 turns at
-    // the robot's 2.2 to 3.2 rad/s).
+    // be longer than one turn.
     assert_eq!(sweep(1.0, config::compass::CALIBRATION_SAMPLES).sectors(), 9);
     assert_eq!(sweep(1.25, config::compass::CALIBRATION_SAMPLES).sectors(), 12);
 }
@@ -56,7 +58,8 @@ fn a_sweep_recovers_the_reports_calibration() {
     let got = cal.result().unwrap();
     assert_eq!(got.bias, [79, 35, 2]);
     let report = config::compass::CALIBRATION;
-    for i in 0..3 {
+    assert_eq!(got.scale_q16[2], report.scale_q16[2], "z is kept");
+    for i in 0..2 {
         let rel = f64::from(got.scale_q16[i] - report.scale_q16[i]) / f64::from(report.scale_q16[i]);
         // Ranges are whole counts: within 0.5 % of the report's scales.
         assert!(rel.abs() < 0.005, "axis {i}: {} vs {}", got.scale_q16[i], report.scale_q16[i]);
@@ -101,13 +104,57 @@ fn too_few_samples_and_flat_axes_are_rejected() {
     let mut cal = MagCalibrator::with_config([128; 3]);
     cal.feed(sample(0.0));
     assert_eq!(cal.result(), Err(CalibrationError::NotEnoughSamples { have: 1, need: 1000 }));
-    // z never changes: no scale can be computed for it.
+    // x never changes: no scale can be computed for it.
+    let mut flat = MagCalibrator::new([128; 3], config::compass::AXES, 360, 0, 10);
+    for k in 0..360 {
+        let s = sample(2.0 * std::f64::consts::TAU * f64::from(k) / 360.0);
+        flat.feed(MagCounts { x: 7, ..s });
+    }
+    assert_eq!(flat.result(), Err(CalibrationError::Degenerate { axis: 0 }));
+}
+
+/// On a flat floor a turn leaves z where it is: the sweep measures x and y
+/// and keeps z's bias and scale from the config.
+#[test]
+fn a_flat_turn_keeps_z_from_the_config() {
     let mut flat = MagCalibrator::new([128; 3], config::compass::AXES, 360, 11, 10);
     for k in 0..360 {
         let s = sample(2.0 * std::f64::consts::TAU * f64::from(k) / 360.0);
         flat.feed(MagCounts { z: 7, ..s });
     }
-    assert_eq!(flat.result(), Err(CalibrationError::Degenerate { axis: 2 }));
+    assert_eq!(paperbot::driver::calibration::VERTICAL, 2);
+    let got = flat.result().unwrap();
+    let cfg = config::compass::CALIBRATION;
+    assert_eq!((got.bias[2], got.scale_q16[2]), (cfg.bias[2], cfg.scale_q16[2]));
+    assert_eq!(&got.bias[..2], &[79, 35]);
+    // the report's proportion holds: 1/s_x + 1/s_y + 1/s_z = 3
+    let inv: f64 = got.scale_q16.iter().map(|&q| 65536.0 / f64::from(q)).sum();
+    assert!((inv - 3.0).abs() < 0.005, "{inv}");
+}
+
+/// A sweep with its samples but short of sectors keeps collecting up to
+/// its cap: one turn's worth of samples ends once the second turn has
+/// covered the circle; a robot that never turns ends at the cap.
+#[test]
+fn a_sweep_short_of_sectors_collects_up_to_its_cap() {
+    let per_turn = 250u16;
+    let mut cal = MagCalibrator::new([128; 3], config::compass::AXES, per_turn, 11, 10);
+    assert_eq!(cal.max_samples(), per_turn + config::compass::CALIBRATION_EXTRA_SAMPLES);
+    let mut k = 0u16;
+    while cal.feed(sample(std::f64::consts::TAU * f64::from(k) / f64::from(per_turn))) != CalStatus::Done {
+        k += 1;
+    }
+    assert!(k > per_turn && k < 2 * per_turn, "done after {k} samples");
+    assert!(cal.sectors() >= 11);
+    assert_eq!(&cal.result().unwrap().bias[..2], &[79, 35]);
+
+    let mut still = MagCalibrator::new([128; 3], config::compass::AXES, per_turn, 11, 10);
+    let mut n = 0u16;
+    while still.feed(sample(0.0)) != CalStatus::Done {
+        n += 1;
+    }
+    assert_eq!(n + 1, still.max_samples());
+    assert_eq!(still.result(), Err(CalibrationError::SweepIncomplete { sectors: 0, need: 11 }));
 }
 
 #[test]
@@ -168,6 +215,7 @@ fn biases_round_half_away_from_zero() {
         let mut cal = MagCalibrator::new([128; 3], config::compass::AXES, 2, 0, i32::MAX);
         cal.feed(MagCounts { x: lo, y: lo, z: lo });
         assert_eq!(cal.feed(MagCounts { x: hi, y: hi, z: hi }), CalStatus::Done);
-        assert_eq!(cal.result().map(|c| c.bias), Ok([want; 3]), "{lo}..{hi}");
+        let kept_z = config::compass::CALIBRATION.bias[2];
+        assert_eq!(cal.result().map(|c| c.bias), Ok([want, want, kept_z]), "{lo}..{hi}");
     }
 }

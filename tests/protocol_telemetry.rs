@@ -317,7 +317,7 @@ fn status_line() {
         out.as_str(),
         "# status t_ms=1200 mode=drive motion=fwd v_mps=0.130 w_radps=0.000 left_ms=800 x_mm=12 y_mm=-3 \
          heading_deg=90.000 left_cmd=107.00 right_cmd=61.00 trim_left=0.00 trim_right=-1.50 rate_hz=10 \
-         front=ok right=ok compass=down faults=3/0/0/0/0/0"
+         front=ok right=ok compass=down f_bus=3 f_timeout=0 f_missing=0 f_bad_sample=0 f_outliers=0 f_overruns=0"
     );
 
     // the widest status fits MAX_STATUS, stays one printable line

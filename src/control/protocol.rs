@@ -48,11 +48,14 @@
 //!
 //! Every line gets one answer line: `# ok <canonical command>` (the command
 //! as understood, every number at its resolution; parsing it gives the same
-//! command) or `# err <problem>`. A refused line changes nothing.
+//! command) or `# err <problem>`. A refused line changes nothing. The speed
+//! and rate limits guard against typos; a motion the servos cannot drive as
+//! asked is answered by the control loop with the motion they drive
+//! ([`crate::control::Controller::handle`]).
 //!
 //! ```text
 //! > fwd 0.13 2.5            # ok fwd 0.130 2.500
-//! > BACK .1                 # ok back 0.100
+//! > BACK .12                # ok back 0.120
 //! > ccw 2.5 1s              # ok ccw 2.500 1.000
 //! > servo 107 61.5 0.8      # ok servo 107.00 61.50 0.800
 //! > trim r -1.25            # ok trim right -1.25
@@ -112,8 +115,9 @@ pub const MAX_LINE: usize = crate::config::serial::MAX_LINE;
 /// `Err` (the longest is a `missing`/`bad` message, about 90 bytes).
 pub const MAX_RESPONSE: usize = 128;
 
-/// Longest status line from [`format_status`] (every field at its widest).
-pub const MAX_STATUS: usize = 384;
+/// Longest status line from [`format_status`] (every field at its widest:
+/// 394 bytes).
+pub const MAX_STATUS: usize = 400;
 
 /// A buffer of this size holds any line the protocol writes (telemetry row,
 /// response, status, help line).

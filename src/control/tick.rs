@@ -220,7 +220,8 @@ where
         }
     }
 
-    /// Carries out one parsed command (answers `# ok <command>` first).
+    /// Carries out one parsed command and answers `# ok <command>` (for a
+    /// motion the servos cannot drive as asked, the motion they drive).
     pub fn handle(&mut self, cmd: Command, sink: &mut impl LineSink) {
         self.command_seen = true;
         if matches!(self.mode, Mode::Calibrate { .. })
@@ -228,14 +229,17 @@ where
         {
             self.end_calibration(None, sink);
         }
-        self.respond(&Response::Ok(&cmd), sink);
+        if !matches!(cmd, Command::Drive { .. }) {
+            self.respond(&Response::Ok(&cmd), sink);
+        }
         match cmd {
             Command::Drive { motion, duration_ms } => {
                 let drive = self.model.drive(motion);
                 self.mode = Mode::Drive { drive, timer: Timer::new(duration_ms) };
-                if drive.saturated {
-                    self.respond(&Response::Note("clamped to the measured range of the actuator model"), sink);
-                }
+                // a motion outside what the servos drive is driven at the
+                // nearest they can, and the answer says so: `fwd 0.05` -> `# ok fwd 0.124`
+                let driven = if drive.saturated { Command::Drive { motion: drive.motion, duration_ms } } else { cmd };
+                self.respond(&Response::Ok(&driven), sink);
             }
             Command::Stop => {
                 self.mode = Mode::Idle;
@@ -264,16 +268,17 @@ where
                 self.dead = pose;
             }
             Command::Calibrate { samples } => {
-                self.calibrator = Some(MagCalibrator::new(
+                let calibrator = MagCalibrator::new(
                     self.compass.asa(),
                     config::compass::AXES,
                     samples,
                     config::compass::CALIBRATION_MIN_SECTORS,
                     config::compass::CALIBRATION_MIN_RADIUS,
-                ));
+                );
+                self.calibrator = Some(calibrator);
                 let turn = Motion::Turn(TurnRate::from_mrad_s(config::compass::CALIBRATION_TURN_MRAD_S));
-                // samples <= u16::MAX: the product fits in u32 (asserted at MAX_SPAN_MS)
-                let limit_ms = u32::from(samples) * config::compass::CALIBRATION_MS_PER_SAMPLE;
+                // max_samples <= u16::MAX: the product fits in u32 (asserted at MAX_SPAN_MS)
+                let limit_ms = u32::from(calibrator.max_samples()) * config::compass::CALIBRATION_MS_PER_SAMPLE;
                 self.mode = Mode::Calibrate { drive: self.model.drive(turn), timer: Timer::new(Some(limit_ms)) };
             }
             Command::Rate { hz } => {

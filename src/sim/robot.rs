@@ -322,6 +322,8 @@ fn set_truth(sensors: &SimSensors, cfg: &SimConfig, p: &PoseF64, rng: &mut Rng) 
 /// `theta` (radians clockwise from north), with heading noise: the earth
 /// field in the car's frame, mapped to the chip's axes, then distorted by
 /// the inverse of the configured calibration (`adj = corrected / scale + bias`).
+/// The car stays flat on the floor: a turn sweeps the horizontal field through
+/// the forward and right axes, the vertical axis reads the same at every heading.
 pub fn field_for(theta: f64, noise_deg: f64, rng: &mut Rng) -> [i32; 3] {
     let m = &config::compass::MODEL;
     // magnetic heading: true heading minus the (east) declination

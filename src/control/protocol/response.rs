@@ -81,8 +81,9 @@ pub struct Status {
 /// Appends the status line (no terminator), `key=value` pairs:
 /// `# status t_ms=1200 mode=drive motion=fwd v_mps=0.130 w_radps=0.000 left_ms=800 x_mm=12 y_mm=-3
 /// heading_deg=90.000 left_cmd=107.00 right_cmd=61.00 trim_left=0.00 trim_right=-1.50 rate_hz=10
-/// front=ok right=ok compass=down faults=0/0/0/0/0/0` (one line; `left_ms` only for timed
-/// commands; faults in telemetry column order). Fits in [`super::MAX_OUT_LINE`].
+/// front=ok right=ok compass=down f_bus=0 f_timeout=0 f_missing=0 f_bad_sample=0 f_outliers=0
+/// f_overruns=0` (one line; `left_ms` only for timed commands; the fault
+/// counters named as the telemetry columns). Fits in [`super::MAX_OUT_LINE`].
 pub fn format_status(s: &Status, out: &mut dyn TextOut) -> Result<(), Overflow> {
     let (v, w) = match s.motion {
         Motion::Stop => (0, 0),
@@ -129,12 +130,16 @@ pub fn format_status(s: &Status, out: &mut dyn TextOut) -> Result<(), Overflow> 
     push_str(out, up(s.right_ok))?;
     push_str(out, " compass=")?;
     push_str(out, up(s.compass_ok))?;
-    push_str(out, " faults=")?;
     let f = &s.faults;
-    for (i, n) in [f.bus, f.timeout, f.missing, f.bad_sample, f.rejected_outliers, f.overruns].into_iter().enumerate() {
-        if i > 0 {
-            push_str(out, "/")?;
-        }
+    for (name, n) in [
+        (" f_bus=", f.bus),
+        (" f_timeout=", f.timeout),
+        (" f_missing=", f.missing),
+        (" f_bad_sample=", f.bad_sample),
+        (" f_outliers=", f.rejected_outliers),
+        (" f_overruns=", f.overruns),
+    ] {
+        push_str(out, name)?;
         push_u32(out, n)?;
     }
     Ok(())
@@ -190,7 +195,7 @@ pub fn format_calibration_report(
             push_u32(t, u32::from(samples))?;
             push_str(t, " samples, ")?;
             push_u32(t, u32::from(sectors))?;
-            push_str(t, " of 12 sectors; applied. For config::compass:")
+            push_str(t, " of 12 sectors; x and y measured, z kept from config; applied. For config::compass:")
         }
         Some(Err(CalibrationError::NotEnoughSamples { have, need })) => {
             push_str(t, "# err calibration timed out: ")?;
@@ -212,6 +217,9 @@ pub fn format_calibration_report(
         }
     }
 }
+
+// The calibration report names z as the axis kept from the config.
+const _: () = assert!(crate::model::compass::calibration::VERTICAL == 2);
 
 /// The `CALIBRATION` line of `config::compass` for `cal`, ready to paste
 /// (the same text as `model::compass::ConfigLine`, written without

@@ -3,6 +3,17 @@
 //! maximum of each axis; then `bias = (max + min) / 2` and
 //! `scale = mean half-range / half-range` per axis.
 //!
+//! A turn in place on a flat floor only sweeps the field through the
+//! forward and right axes; the vertical one barely changes, so its bias and
+//! scale cannot be observed. The sweep measures the two horizontal axes and
+//! keeps the vertical axis's bias and scale from
+//! [`config::compass::CALIBRATION`]. The mean half-range counts the vertical
+//! axis with the half-range its kept scale implies, so the scales keep the
+//! report's proportion (`1/s_f + 1/s_r + 1/s_v = 3`): with `r` the ranges,
+//! `R = (r_f + r_r) s_v / (3 s_v - 1)` and `s_i = R / r_i`. (The heading
+//! uses only the ratio of the horizontal scales; this keeps the scales'
+//! level comparable with the config's.)
+//!
 //! [`MagCalibrator`] is an incremental state machine: the control loop feeds
 //! it one raw sample at a time during a turn (no buffer, no float, no
 //! allocation) and asks for the [`result`](MagCalibrator::result) at the
@@ -13,9 +24,10 @@
 //! sectors (a robot that turned half a circle, or not at all, gives a box
 //! that is not the field's). The centre only settles once the turn has
 //! passed every extreme, so the first turn counts about 9 sectors: a sweep
-//! must be longer than one turn (the configured 1000 samples at 100 Hz are
-//! 3.5 to 5 turns at the robot's 2.2 to 3.2 rad/s). [`ConfigLine`] prints
-//! the result as a line to paste into `src/config.rs`.
+//! that has its samples but not its sectors keeps collecting, up to
+//! [`config::compass::CALIBRATION_EXTRA_SAMPLES`] more (so `cal 250`, one
+//! turn's samples, ends within about two turns). [`ConfigLine`] prints the
+//! result as a line to paste into `src/config.rs`.
 
 use core::fmt;
 
@@ -25,6 +37,21 @@ use crate::model::compass::{apply_asa, AxisMap, MagCalibration, MagCounts};
 
 /// Number of sectors the circle is cut into (30 degrees each).
 pub const SECTORS: u8 = 12;
+
+/// The axis a turn on a flat floor cannot observe (chip index): the one
+/// neither forward nor right in [`config::compass::AXES`]. Its bias and
+/// scale are kept from [`config::compass::CALIBRATION`].
+pub const VERTICAL: usize = 3 - (config::compass::AXES.forward.index + config::compass::AXES.right.index) as usize;
+
+/// `s_v / (3 s_v - 1)` in Q24 for the kept vertical scale `s_v`: the mean
+/// half-range as a share of the two measured ones' sum (module docs).
+const KEPT_SHARE_Q24: i64 = {
+    let sv = config::compass::CALIBRATION.scale_q16[VERTICAL] as i64;
+    // a kept scale at or below 1/3 leaves no half-range for the horizontal
+    // axes; from 1/2 up the share is at most 1 (2^24 in Q24)
+    assert!(2 * sv >= 65_536);
+    (sv << 24) / (3 * sv - 65_536)
+};
 
 /// Why a sweep was rejected.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
@@ -43,7 +70,8 @@ pub enum CalibrationError {
 pub enum CalStatus {
     /// Still collecting: samples so far.
     Collecting(u16),
-    /// Enough samples; call [`MagCalibrator::result`].
+    /// Enough samples and sectors, or no more samples allowed; call
+    /// [`MagCalibrator::result`].
     Done,
 }
 
@@ -53,6 +81,8 @@ pub struct MagCalibrator {
     asa: [u8; 3],
     axes: AxisMap,
     need_samples: u16,
+    /// The most samples the sweep takes while it lacks sectors.
+    max_samples: u16,
     need_sectors: u8,
     min_radius: i32,
     count: u16,
@@ -73,6 +103,7 @@ impl MagCalibrator {
             asa,
             axes,
             need_samples: samples,
+            max_samples: samples.saturating_add(config::compass::CALIBRATION_EXTRA_SAMPLES),
             need_sectors: min_sectors,
             min_radius,
             count: 0,
@@ -94,9 +125,10 @@ impl MagCalibrator {
     }
 
     /// Feeds one raw sample (chip axes, as read). Samples after the sweep
-    /// is complete are ignored.
+    /// is complete are ignored. The sweep is complete with its samples and
+    /// sectors, or at [`max_samples`](Self::max_samples).
     pub fn feed(&mut self, raw: MagCounts) -> CalStatus {
-        if self.count >= self.need_samples {
+        if self.is_done() {
             return CalStatus::Done;
         }
         let adj = [
@@ -110,11 +142,16 @@ impl MagCalibrator {
         }
         self.count = self.count.saturating_add(1);
         self.visit(&adj);
-        if self.count >= self.need_samples {
+        if self.is_done() {
             CalStatus::Done
         } else {
             CalStatus::Collecting(self.count)
         }
+    }
+
+    /// The sweep has its samples and sectors, or all the samples it may take.
+    fn is_done(&self) -> bool {
+        (self.count >= self.need_samples && self.sectors() >= self.need_sectors) || self.count >= self.max_samples
     }
 
     /// Marks the sector of the horizontal vector from the box's centre.
@@ -137,9 +174,15 @@ impl MagCalibrator {
         self.sectors |= 1u16.checked_shl(sector).unwrap_or(0);
     }
 
-    /// Samples fed so far (up to the sweep's size).
+    /// Samples fed so far (up to [`max_samples`](Self::max_samples)).
     pub fn samples(&self) -> u16 {
         self.count
+    }
+
+    /// The most samples the sweep takes: the asked number plus
+    /// [`config::compass::CALIBRATION_EXTRA_SAMPLES`] while sectors are missing.
+    pub fn max_samples(&self) -> u16 {
+        self.max_samples
     }
 
     /// Sectors visited so far.
@@ -152,7 +195,9 @@ impl MagCalibrator {
         (self.min, self.max)
     }
 
-    /// The new calibration, if the sweep is complete and covers the circle.
+    /// The new calibration, if the sweep is complete and covers the circle:
+    /// the forward and right axes measured, the [`VERTICAL`] one kept from
+    /// [`config::compass::CALIBRATION`] (see the module docs).
     pub fn result(&self) -> Result<MagCalibration, CalibrationError> {
         if self.count < self.need_samples {
             return Err(CalibrationError::NotEnoughSamples { have: self.count, need: self.need_samples });
@@ -160,11 +205,15 @@ impl MagCalibrator {
         if self.sectors() < self.need_sectors {
             return Err(CalibrationError::SweepIncomplete { sectors: self.sectors(), need: self.need_sectors });
         }
-        let mut bias = [0i32; 3];
+        let mut cal = config::compass::CALIBRATION;
         let mut range = [0i32; 3];
+        let mut sum = 0i32;
         for (i, ((lo, hi), (b, r))) in
-            self.min.iter().zip(self.max.iter()).zip(bias.iter_mut().zip(range.iter_mut())).enumerate()
+            self.min.iter().zip(self.max.iter()).zip(cal.bias.iter_mut().zip(range.iter_mut())).enumerate()
         {
+            if i == VERTICAL {
+                continue;
+            }
             // lo <= hi, both |.| < 2^17: 32-bit sums and differences.
             *r = hi.saturating_sub(*lo);
             if *r <= 0 {
@@ -173,17 +222,18 @@ impl MagCalibrator {
             // (hi + lo) / 2, halves away from zero (`/ 2` truncates toward zero)
             let s = hi.saturating_add(*lo);
             *b = s.saturating_add(if s < 0 { -1 } else { 1 }) / 2;
+            sum = sum.saturating_add(*r);
         }
-        // scale_i = (sum / 3) / range_i = sum / (3 range_i), in Q16: sum < 2^20,
-        // so sum 2^16 needs 64 bits.
-        let sum = i64::from(range.iter().fold(0i32, |a, &r| a.saturating_add(r)));
-        let mut scale_q16 = [0i32; 3];
-        for (i, (s, r)) in scale_q16.iter_mut().zip(range.iter()).enumerate() {
-            let q = div_round(sum << 16, i64::from(r.saturating_mul(3)))
-                .ok_or(CalibrationError::Degenerate { axis: i as u8 })?;
+        // s_i = (r_f + r_r) share / r_i in Q16: sum < 2^19, share <= 2^24
+        let num = i64::from(sum).saturating_mul(KEPT_SHARE_Q24);
+        for (i, (s, r)) in cal.scale_q16.iter_mut().zip(range).enumerate() {
+            if i == VERTICAL {
+                continue;
+            }
+            let q = div_round(num, i64::from(r) << 8).ok_or(CalibrationError::Degenerate { axis: i as u8 })?;
             *s = i32::try_from(q).map_err(|_| CalibrationError::Degenerate { axis: i as u8 })?;
         }
-        Ok(MagCalibration { bias, scale_q16 })
+        Ok(cal)
     }
 }
 
