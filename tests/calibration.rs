@@ -122,7 +122,7 @@ fn a_flat_turn_keeps_z_from_the_config() {
         let s = sample(2.0 * std::f64::consts::TAU * f64::from(k) / 360.0);
         flat.feed(MagCounts { z: 7, ..s });
     }
-    assert_eq!(paperbot::driver::calibration::VERTICAL, 2);
+    assert_eq!(paperbot::model::compass::calibration::VERTICAL, 2);
     let got = flat.result().unwrap();
     let cfg = config::compass::CALIBRATION;
     assert_eq!((got.bias[2], got.scale_q16[2]), (cfg.bias[2], cfg.scale_q16[2]));
