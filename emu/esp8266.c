@@ -44,7 +44,8 @@
  *                     pins GPIO5/4 and UART0 wired to the simulated robot
  *   profile=FILE      at stop-ms, the CPU's PC sampled every profile-ns
  *                     virtual ns (with sim=, from when the simulator says
- *                     the firmware's loop runs): "<pc hex> <samples>" lines
+ *                     the firmware's loop runs): "<pc> <a0> <samples>"
+ *                     lines (hex, hex, decimal)
  *
  * SPDX-License-Identifier: GPL-2.0-or-later
  */
@@ -827,10 +828,16 @@ static void link_start(Esp8266State *s)
 static void profile_tick(void *opaque)
 {
     Esp8266State *s = opaque;
-    gpointer pc = GUINT_TO_POINTER(s->cpu->env.pc);
-    guint n = GPOINTER_TO_UINT(g_hash_table_lookup(s->profile, pc));
+    /* the PC and a0 (call0 ABI: in a leaf function, its return address) */
+    uint64_t key = (uint64_t)s->cpu->env.pc << 32 | s->cpu->env.regs[0];
+    uint64_t *n = g_hash_table_lookup(s->profile, &key);
 
-    g_hash_table_insert(s->profile, pc, GUINT_TO_POINTER(n + 1));
+    if (!n) {
+        n = g_new0(uint64_t, 2);
+        n[0] = key;
+        g_hash_table_insert(s->profile, n, n);
+    }
+    n[1]++;
     s->profile_samples++;
     timer_mod(s->profile_timer, now_ns() + s->profile_ns);
 }
@@ -838,7 +845,7 @@ static void profile_tick(void *opaque)
 static void profile_write(Esp8266State *s)
 {
     GHashTableIter it;
-    gpointer pc, n;
+    gpointer k, v;
     FILE *f = fopen(s->profile_path, "w");
 
     if (!f) {
@@ -849,8 +856,10 @@ static void profile_write(Esp8266State *s)
             PRId64 " ns\n", s->profile_samples, s->profile_ns,
             s->profile_start_ns, now_ns());
     g_hash_table_iter_init(&it, s->profile);
-    while (g_hash_table_iter_next(&it, &pc, &n)) {
-        fprintf(f, "%08x %u\n", GPOINTER_TO_UINT(pc), GPOINTER_TO_UINT(n));
+    while (g_hash_table_iter_next(&it, &k, &v)) {
+        const uint64_t *n = v;
+        fprintf(f, "%08x %08x %" PRIu64 "\n", (uint32_t)(n[0] >> 32),
+                (uint32_t)n[0], n[1]);
     }
     fclose(f);
 }
@@ -1328,7 +1337,8 @@ static void esp8266_init(MachineState *machine)
     }
     s->gpio_levels = gpio_compute_levels(s);
     if (s->profile_path) {
-        s->profile = g_hash_table_new(NULL, NULL);
+        s->profile = g_hash_table_new_full(g_int64_hash, g_int64_equal,
+                                           NULL, g_free);
         s->profile_timer = timer_new_ns(QEMU_CLOCK_VIRTUAL, profile_tick, s);
         s->profile_ns = MAX(s->profile_ns, 1u);
         if (!s->sim_path) {
