@@ -138,7 +138,7 @@ pub fn run(root: &Path, board: &Board, work: &Path, flash: &Path) -> Result<(), 
 
     // wire faults, each from 2 s after power-on; 3 s to recover
     let faults: [(&str, &str, usize, &[usize]); 3] = [
-        ("nack", "nack:68@2-2.5", COMPASS, &[F_BUS, F_MISSING, F_TIMEOUT]),
+        ("nack", "nack:0c@2-2.5", COMPASS, &[F_BUS, F_MISSING, F_TIMEOUT]),
         ("sda-low", "sda-low@2-2.3", FRONT_RAW, &[F_BUS]),
         ("stall", "stall:front@2-3", FRONT_RAW, &[F_TIMEOUT]),
     ];
