@@ -226,14 +226,8 @@ impl SimRobot {
         clock.advance_ns(self.next_tick_ns.saturating_sub(clock.now_ns()));
     }
 
-    /// True when the nose (reference point) and both wheels are inside the arena.
     fn fits(&self, p: &PoseF64) -> bool {
-        let d = config::geometry::ROTATION_TO_REFERENCE.to_mm_f64();
-        let (s, c) = p.theta.sin_cos();
-        let (ax, ay) = (p.x - d * c, p.y - d * s);
-        let h = config::sim::HALF_TRACK_MM;
-        let a = &self.cfg.arena;
-        a.contains(p.x, p.y) && a.contains(ax - h * s, ay + h * c) && a.contains(ax + h * s, ay - h * c)
+        body_fits(&self.cfg.arena, p)
     }
 
     /// Runs `script` (times from now) for `duration_us` of simulated time,
@@ -298,8 +292,17 @@ impl SimRobot {
     }
 }
 
+/// True when the nose (reference point) and both wheels are inside the arena.
+pub fn body_fits(a: &Arena, p: &PoseF64) -> bool {
+    let d = config::geometry::ROTATION_TO_REFERENCE.to_mm_f64();
+    let (s, c) = p.theta.sin_cos();
+    let (ax, ay) = (p.x - d * c, p.y - d * s);
+    let h = config::sim::HALF_TRACK_MM;
+    a.contains(p.x, p.y) && a.contains(ax - h * s, ay + h * c) && a.contains(ax + h * s, ay - h * c)
+}
+
 /// Sets the fake chips' truth for the body at `p`.
-fn set_truth(sensors: &SimSensors, cfg: &SimConfig, p: &PoseF64, rng: &mut Rng) {
+pub fn set_truth(sensors: &SimSensors, cfg: &SimConfig, p: &PoseF64, rng: &mut Rng) {
     let lidar = |mount: &LidarMount, model: &LidarModel, rng: &mut Rng| -> u16 {
         let (x, y, dir) = p.lidar_ray(mount);
         let Some(t) = cfg.arena.ray_cast(x, y, dir) else { return crate::model::lidar::NO_TARGET_READING };
