@@ -157,7 +157,13 @@ fn main() -> ExitCode {
 }
 
 fn summary(args: &Args, robot: &EmulatedRobot) -> ExitCode {
-    let start_ns = robot.script_start_ns().unwrap_or(0);
+    // The image boots believing it is at (0, 0, 0): its rows count from the
+    // answer to the script's first command, the start pose.
+    let start_ns = robot
+        .lines
+        .iter()
+        .find(|(t, l)| *t >= robot.script_start_ns().unwrap_or(0) && l.starts_with("# ok pose"))
+        .map_or(0, |(t, _)| *t);
     let rows: Vec<(u64, TelemetryRow)> = robot
         .lines
         .iter()

@@ -42,7 +42,8 @@ mod robot {
     use esp8266_hal::entry;
     use esp8266_hal::uart::UART0Serial;
 
-    use paperbot::board::esp8266::{halt, start_watchdog, Board, I2cBus, MicrosClock};
+    use paperbot::board::bitbang_i2c::CycleClock as _;
+    use paperbot::board::esp8266::{halt, start_watchdog, Board, Ccount, I2cBus, MicrosClock};
     use paperbot::config;
     use paperbot::control::tick::{Controller, LineSink, TICK_US};
     use paperbot::driver::bus::SharedI2c;
@@ -52,6 +53,10 @@ mod robot {
     use paperbot::driver::HeadingSensor as _;
     use paperbot::math::Angle;
     use paperbot::model::Pose;
+
+    const CYCLES_PER_MS: u32 = config::board::CPU_HZ / 1_000;
+    /// The loop period in CPU cycles.
+    const TICK_CYCLES: u32 = TICK_US * (config::board::CPU_HZ / 1_000_000);
 
     /// Telemetry and replies go out on UART0, one line each, CR LF.
     struct UartLines<'a>(&'a mut UART0Serial);
@@ -93,28 +98,30 @@ mod robot {
         let servos = ServoPair::with_config(servo_timer.output());
         let mut ctl = Controller::new(front, right, compass, servos, Pose::from_mm(0, 0, Angle::ZERO));
 
+        // The loop spins on CCOUNT and converts it to microseconds only for
+        // a tick: the conversion divides, which the lx106 does in software.
         let mut clock = MicrosClock::new();
-        let mut last_tick = clock.now_us();
+        let mut last_tick = Ccount.now();
         let mut last_blink = last_tick;
         start_watchdog(&mut watchdog);
         loop {
             watchdog.feed();
-            let now = clock.now_us();
+            let now = Ccount.now();
 
             // Commands: every byte waiting in the RX FIFO.
             while let Ok(byte) = serial.read() {
                 ctl.feed(byte, &mut UartLines(&mut serial));
             }
 
-            if now.wrapping_sub(last_tick) >= TICK_US {
+            if now.wrapping_sub(last_tick) >= TICK_CYCLES {
                 last_tick = now;
-                ctl.tick(now, &mut UartLines(&mut serial));
+                ctl.tick(clock.now_us(), &mut UartLines(&mut serial));
             }
 
             // LED: slow blink when every sensor is up, fast when one is down.
             let healthy = ctl.front_health().up && ctl.right_health().up && ctl.compass_health().up;
             let half_ms = if healthy { config::board::LED_BLINK_OK_MS } else { config::board::LED_BLINK_FAULT_MS };
-            if now.wrapping_sub(last_blink) >= half_ms.saturating_mul(1_000) {
+            if now.wrapping_sub(last_blink) >= half_ms.saturating_mul(CYCLES_PER_MS) {
                 last_blink = now;
                 led.toggle();
             }
