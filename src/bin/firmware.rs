@@ -43,7 +43,10 @@ mod robot {
     use esp8266_hal::uart::UART0Serial;
 
     use paperbot::board::esp8266::{halt, start_watchdog, Board, I2cBus, MicrosClock};
+    use paperbot::board::rtc_store::RtcMissionStore;
     use paperbot::config;
+    use paperbot::control::log::RingLog;
+    use paperbot::control::mission::{Mission, MissionStore as _};
     use paperbot::control::tick::{Controller, LineSink, TICK_US};
     use paperbot::driver::bus::SharedI2c;
     use paperbot::driver::compass::Compass;
@@ -51,7 +54,12 @@ mod robot {
     use paperbot::driver::servo::ServoPair;
     use paperbot::driver::HeadingSensor as _;
     use paperbot::math::Angle;
+    use paperbot::model::measurement::Arena;
     use paperbot::model::Pose;
+
+    /// The on-board log: a static, so that it counts in the image's DRAM
+    /// budget (`cargo fw-image`), not on the ROM's stack.
+    static mut LOG: RingLog<{ config::log::ROWS }> = RingLog::new();
 
     /// Telemetry and replies go out on UART0, one line each, CR LF.
     struct UartLines<'a>(&'a mut UART0Serial);
@@ -91,7 +99,16 @@ mod robot {
         let _ = writeln!(serial, "lidars {:?} {:?}, compass {:?}", up.front, up.right, compass_up);
 
         let servos = ServoPair::with_config(servo_timer.output());
-        let mut ctl = Controller::new(front, right, compass, servos, Pose::from_mm(0, 0, Angle::ZERO));
+        // SAFETY: `run` is entered once (main never returns): the only reference to LOG
+        let log = unsafe { &mut *core::ptr::addr_of_mut!(LOG) };
+        let start = Pose::from_mm(0, 0, Angle::ZERO);
+        let mut ctl = Controller::with_log(front, right, compass, servos, start, Arena::DEFAULT, log);
+        // a mission uploaded before a reset (RTC memory; not after power-off)
+        let mut store = RtcMissionStore::new();
+        if let Some(mission) = Mission::decode(&store.load()) {
+            let _ = writeln!(serial, "mission of {} steps kept from before the reset", mission.len());
+            ctl.set_mission(mission);
+        }
 
         let mut clock = MicrosClock::new();
         let mut last_tick = clock.now_us();
@@ -109,6 +126,9 @@ mod robot {
             if now.wrapping_sub(last_tick) >= TICK_US {
                 last_tick = now;
                 ctl.tick(now, &mut UartLines(&mut serial));
+            }
+            if ctl.take_mission_changed() {
+                store.save(&ctl.mission().encode());
             }
 
             // LED: slow blink when every sensor is up, fast when one is down.
