@@ -67,7 +67,7 @@ use crate::control::protocol::{
     ParseError, Response, Side, Telemetry, HELP, MAX_OUT_LINE,
 };
 use crate::driver::{CompassSample, HeadingSensor, LidarSample, MagCalibrate, Servos};
-use crate::math::{div_u64, Angle, Coord, Dt, Length, TurnRate};
+use crate::math::{div_u64, Angle, Dt, Length, TurnRate};
 use crate::model::compass::{CalStatus, CalibrationError, MagCalibration, MagCalibrator};
 use crate::model::estimator::{Estimator, Update};
 use crate::model::measurement::{Arena, LidarId};
@@ -315,15 +315,7 @@ where
                     *drive = self.model.drive(drive.motion);
                 }
             }
-            Command::SetPose { x_mm, y_mm, heading } => {
-                let pose = Pose::new(
-                    Coord::from_length(Length::from_mm(x_mm)),
-                    Coord::from_length(Length::from_mm(y_mm)),
-                    heading,
-                );
-                self.estimator.reset(pose);
-                self.dead = pose;
-            }
+            Command::SetPose { x_mm, y_mm, heading } => self.set_pose(Pose::from_mm(x_mm, y_mm, heading)),
             Command::Calibrate { samples } => {
                 let calibrator = MagCalibrator::new(
                     self.compass.asa(),
@@ -358,6 +350,12 @@ where
             Command::Log { hz } => self.set_log_rate(hz),
             Command::Dump => self.start_dump(sink),
         }
+    }
+
+    /// Sets the estimate (and the dead-reckoned pose) to `pose`.
+    fn set_pose(&mut self, pose: Pose) {
+        self.estimator.reset(pose);
+        self.dead = pose;
     }
 
     fn respond(&mut self, r: &Response, sink: &mut impl LineSink) {
@@ -625,20 +623,33 @@ where
         if reached(now, self.next_telemetry_us) {
             self.next_telemetry_us = now.wrapping_add(self.telemetry_period_us);
         }
-        let t = Telemetry {
+        let fresh = [
+            core::mem::take(&mut self.fresh_front),
+            core::mem::take(&mut self.fresh_right),
+            core::mem::take(&mut self.fresh_compass),
+        ];
+        let t = self.snapshot(fresh);
+        self.out.clear();
+        if format_telemetry(&t, &mut self.out).is_ok() {
+            sink.write_line(&self.out);
+        }
+    }
+}
+
+impl<F, R, C, S, L> Controller<F, R, C, S, L> {
+    /// A telemetry row's values now, with the readings flagged fresh
+    /// (front, right, compass).
+    fn snapshot(&self, [front, right, compass]: [bool; 3]) -> Telemetry {
+        Telemetry {
             t_ms: self.t_ms(),
             pose: self.estimator.pose(),
-            front: self.last_front.filter(|_| core::mem::take(&mut self.fresh_front)),
-            right: self.last_right.filter(|_| core::mem::take(&mut self.fresh_right)),
-            compass: self.last_compass.filter(|_| core::mem::take(&mut self.fresh_compass)),
+            front: self.last_front.filter(|_| front),
+            right: self.last_right.filter(|_| right),
+            compass: self.last_compass.filter(|_| compass),
             motion: self.applied.motion,
             left_cmd: self.applied.left,
             right_cmd: self.applied.right,
             faults: self.faults,
-        };
-        self.out.clear();
-        if format_telemetry(&t, &mut self.out).is_ok() {
-            sink.write_line(&self.out);
         }
     }
 }

@@ -11,7 +11,7 @@ use crate::control::log::RowLog;
 use crate::control::mission::{Mission, Step};
 use crate::control::protocol::number::{push_fixed_parts, push_i32, push_str, push_u32};
 use crate::control::protocol::{
-    format_command, format_row, telemetry_header, Command, MissionOp, Response, Telemetry, TelemetryRow,
+    format_command, format_row, telemetry_header, Command, MissionOp, Response, TelemetryRow,
 };
 use crate::driver::{HeadingSensor, LidarSample, MagCalibrate, Servos};
 use crate::math::{Angle, Length};
@@ -136,7 +136,7 @@ where
         if line.is_ok() {
             sink.write_line(&self.out);
         }
-        self.abort("a step was refused", sink);
+        self.abort("stopped: a step was refused", sink);
     }
 
     pub(super) fn mission_op(&mut self, op: MissionOp, cmd: &Command, sink: &mut impl LineSink) {
@@ -261,7 +261,7 @@ where
             MissionPhase::Running => {}
         }
         if elapsed >= ms_to_us(config::mission::TIME_LIMIT_MS) {
-            return self.abort("stopped at its time limit", sink);
+            return self.abort("stopped: its time limit", sink);
         }
         if !matches!(self.mode, Mode::Idle) {
             return;
@@ -286,17 +286,8 @@ where
                 let drive = self.model.drive(motion);
                 self.mode = Mode::Drive { drive, timer: Timer::new(Some(duration_ms)) };
             }
-            Step::Pose { .. } => self.handle_pose(&cmd),
+            Step::Pose { x_mm, y_mm, heading } => self.set_pose(crate::model::Pose::from_mm(x_mm, y_mm, heading)),
             Step::Wait { .. } | Step::Goto { .. } | Step::Face { .. } => self.begin(&cmd, sink),
-        }
-    }
-
-    /// `pose` (a mission step sets it without an answer line).
-    fn handle_pose(&mut self, cmd: &Command) {
-        if let Command::SetPose { x_mm, y_mm, heading } = *cmd {
-            let pose = crate::model::Pose::from_mm(x_mm, y_mm, heading);
-            self.estimator.reset(pose);
-            self.dead = pose;
         }
     }
 
@@ -372,7 +363,7 @@ where
         if line.is_ok() {
             sink.write_line(&self.out);
         }
-        self.abort("a step failed", sink);
+        self.abort("stopped: a step failed", sink);
     }
 
     /// Ends a mission under way (if any): the robot stops.
@@ -405,17 +396,7 @@ where
             self.next_log_us = now.wrapping_add(self.log_period_us);
         }
         let fresh = core::mem::take(&mut self.log_fresh);
-        let t = Telemetry {
-            t_ms: self.t_ms(),
-            pose: self.estimator.pose(),
-            front: self.last_front.filter(|_| fresh & LOG_FRONT != 0),
-            right: self.last_right.filter(|_| fresh & LOG_RIGHT != 0),
-            compass: self.last_compass.filter(|_| fresh & LOG_COMPASS != 0),
-            motion: self.applied.motion,
-            left_cmd: self.applied.left,
-            right_cmd: self.applied.right,
-            faults: self.faults,
-        };
+        let t = self.snapshot([fresh & LOG_FRONT != 0, fresh & LOG_RIGHT != 0, fresh & LOG_COMPASS != 0]);
         self.log.push(&TelemetryRow::from(&t));
     }
 }
