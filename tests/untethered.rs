@@ -283,3 +283,47 @@ fn a_mission_survives_a_reset_through_the_store_and_a_fresh_one_starts_empty() {
     // power-off: the store holds garbage, which is no mission
     assert_eq!(Mission::decode(&MemoryStore([0xDEAD_BEEF; paperbot::control::mission::WORDS]).load()), None);
 }
+
+#[test]
+fn the_untethered_commands_parse_echo_canonically_and_refuse_clearly() {
+    use paperbot::control::protocol::{format_command, format_response, parse, Response};
+    for (line, canonical) in [
+        ("goto 300 -20", "goto 300 -20"),
+        ("FACE 90.5", "face 90.500"),
+        ("face -90", "face 270.000"),
+        ("wait 2.5s", "wait 2.500"),
+        ("mission add fwd 0.13 2", "mission add fwd 0.130 2.000"),
+        ("  mission   ADD\tgoto 1 2 ", "mission add goto 1 2"),
+        ("mission add pose 10 20 30", "mission add pose 10 20 30.000"),
+        ("mission list", "mission list"),
+        ("mission clear", "mission clear"),
+        ("Mission Start", "mission start"),
+        ("log 10", "log 10"),
+        ("dump", "dump"),
+    ] {
+        let cmd = parse(line.as_bytes()).unwrap_or_else(|e| panic!("{line}: {e:?}"));
+        let mut s = heapless::String::<128>::new();
+        format_command(&cmd, &mut s).unwrap();
+        assert_eq!(s, canonical, "{line}");
+        assert_eq!(parse(s.as_bytes()), Ok(cmd), "{line}: the canonical form parses back");
+    }
+    let not_a_step = "not a mission step, want a timed fwd/back/cw/ccw, wait, goto, face or pose";
+    for (line, answer) in [
+        ("mission", "missing mission action, want add, list, clear or start"),
+        ("mission go", "bad mission action, want add, list, clear or start"),
+        ("mission add fwd 0.13", not_a_step),
+        ("mission add", not_a_step),
+        ("mission add status", not_a_step),
+        ("mission add mission list", not_a_step),
+        ("mission add goto 1", "missing y, want an integer -30000..30000 mm"),
+        ("mission list now", "unexpected input after the arguments"),
+        ("wait", "missing duration, want a number 0.001..60.000 s with up to 3 decimals"),
+        ("goto 1 2 3", "unexpected input after the arguments"),
+        ("log 101", "rate out of range 0..100 Hz"),
+    ] {
+        let e = parse(line.as_bytes()).expect_err(line);
+        let mut s = heapless::String::<128>::new();
+        format_response(&Response::Err(e), &mut s).unwrap();
+        assert_eq!(s.as_str(), format!("# err {answer}"), "{line}");
+    }
+}
