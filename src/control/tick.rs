@@ -154,8 +154,6 @@ pub struct Controller<F, R, C, S, L = RingLog<0>> {
     dump_next: Option<usize>,
     /// The mission changed since [`Controller::take_mission_changed`].
     mission_changed: bool,
-    mission: Mission,
-    log: L,
     front: F,
     right: R,
     compass: C,
@@ -164,6 +162,9 @@ pub struct Controller<F, R, C, S, L = RingLog<0>> {
     model: ActuatorModel,
     input: LineBuffer,
     out: OutLine<MAX_OUT_LINE>,
+    // tick bar: the mission and the log are large and off the tick's path: last
+    mission: Mission,
+    log: L,
 }
 
 impl<F, R, C, S> Controller<F, R, C, S>
@@ -530,13 +531,15 @@ where
         if matches!(self.mode, Mode::Goto { .. }) {
             self.navigate(now, sink);
         }
-        if let Mode::Drive { drive: Drive { motion: Motion::Straight(v), .. }, .. }
-        | Mode::Goto { drive: Drive { motion: Motion::Straight(v), .. }, .. }
-        | Mode::Servo { motion: Motion::Straight(v), .. } = self.mode
-        {
-            if v.to_bits() > 0 {
-                self.wall_stop(now, sink);
+        match self.mode {
+            Mode::Drive { drive: Drive { motion: Motion::Straight(v), .. }, .. }
+            | Mode::Goto { drive: Drive { motion: Motion::Straight(v), .. }, .. }
+            | Mode::Servo { motion: Motion::Straight(v), .. }
+                if v.to_bits() > 0 =>
+            {
+                self.wall_stop(now, sink)
             }
+            _ => {}
         }
     }
 
