@@ -26,32 +26,19 @@ use std::time::Instant;
 use std::vec::Vec;
 
 use super::link::{send, LineReader};
-use super::plan::refusal;
+use super::plan::{refusal, PlanError};
 use super::record::Recorder;
 use crate::config;
 use crate::control::mission::Step;
 use crate::control::protocol::{format_command, parse, parse_telemetry_row, telemetry_header, MAX_LINE, MAX_RESPONSE};
 
-/// A mission file line that cannot be a step.
-#[derive(Clone, PartialEq, Eq, Debug)]
-pub struct MissionFileError {
-    pub line_no: usize,
-    pub message: String,
-}
-
-impl core::fmt::Display for MissionFileError {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        write!(f, "line {}: {}", self.line_no, self.message)
-    }
-}
-
 /// The steps of a mission file, each as its `mission add` command line
-/// (canonical form).
-pub fn parse_mission_file(text: &str) -> Result<Vec<String>, MissionFileError> {
+/// (canonical form); a line that cannot be a step is a [`PlanError`].
+pub fn parse_mission_file(text: &str) -> Result<Vec<String>, PlanError> {
     let mut steps = Vec::new();
     for (i, raw) in text.lines().enumerate() {
         let line_no = i + 1;
-        let err = |message: String| MissionFileError { line_no, message };
+        let err = |message: String| PlanError { line_no, message };
         let content = raw.split('#').next().unwrap_or("").trim();
         if content.is_empty() {
             continue;
@@ -70,7 +57,7 @@ pub fn parse_mission_file(text: &str) -> Result<Vec<String>, MissionFileError> {
     }
     if steps.len() > config::mission::MAX_STEPS {
         let message = format!("{} steps, the robot holds {}", steps.len(), config::mission::MAX_STEPS);
-        return Err(MissionFileError { line_no: text.lines().count(), message });
+        return Err(PlanError { line_no: text.lines().count(), message });
     }
     Ok(steps)
 }
