@@ -104,7 +104,7 @@ mod robot {
         let start = Pose::from_mm(0, 0, Angle::ZERO);
         let mut ctl = Controller::with_log(front, right, compass, servos, start, Arena::DEFAULT, log);
         // a mission uploaded before a reset (RTC memory; not after power-off)
-        let mut store = RtcMissionStore::new();
+        let mut store = RtcMissionStore;
         if let Some(mission) = Mission::decode(&store.load()) {
             let _ = writeln!(serial, "mission of {} steps kept from before the reset", mission.len());
             ctl.set_mission(mission);

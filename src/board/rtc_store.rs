@@ -24,14 +24,9 @@ const RTC_USER_BYTES: usize = 512;
 const _: () = assert!(WORDS * 4 <= RTC_USER_BYTES);
 
 /// The mission store in RTC memory (see the module docs).
-pub struct RtcMissionStore(());
+pub struct RtcMissionStore;
 
 impl RtcMissionStore {
-    /// The one store (the firmware makes it once).
-    pub fn new() -> RtcMissionStore {
-        RtcMissionStore(())
-    }
-
     fn word(i: usize) -> *mut u32 {
         // i < WORDS: inside the user part (asserted above)
         (RTC_USER_MEMORY as *mut u32).wrapping_add(i)
