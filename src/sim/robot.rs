@@ -28,6 +28,7 @@ use super::noise::Rng;
 use super::script::Script;
 use super::sensors::{SimCompass, SimLidar, SimSensors};
 use crate::config;
+use crate::control::log::RingLog;
 use crate::control::{Controller, LineSink, TICK_US};
 use crate::driver::{HeadingSensor, Servos};
 use crate::math::Length;
@@ -55,8 +56,8 @@ impl Servos for SimServos {
     }
 }
 
-/// The control loop on the simulated drivers.
-pub type SimController = Controller<SimLidar, SimLidar, SimCompass, SimServos>;
+/// The control loop on the simulated drivers, with the robot's on-board log.
+pub type SimController = Controller<SimLidar, SimLidar, SimCompass, SimServos, RingLog<{ config::log::ROWS }>>;
 
 /// Noise levels (one sigma); [`Noise::OFF`] for exact runs.
 #[derive(Clone, Copy, PartialEq, Debug)]
@@ -167,7 +168,15 @@ impl SimRobot {
             length_x: Length::from_mm_f64(cfg.arena.length_x),
             width_y: Length::from_mm_f64(cfg.arena.width_y),
         };
-        let ctl = Controller::new_in(front, right, compass, SimServos::default(), cfg.start.to_pose(), arena);
+        let ctl = Controller::with_log(
+            front,
+            right,
+            compass,
+            SimServos::default(),
+            cfg.start.to_pose(),
+            arena,
+            RingLog::new(),
+        );
         let next_tick_ns = sensors.clock.now_ns();
         SimRobot { cfg, sensors, ctl, truth: cfg.start, rng, out: Collect::default(), next_tick_ns, collisions: 0 }
     }
