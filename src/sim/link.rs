@@ -152,6 +152,8 @@ pub struct EmulatedRobot {
     rng: Rng,
     next_step_ns: u64,
     pins: u32,
+    /// Whether `pins` holds levels the board reported.
+    pins_known: bool,
     servos: [ServoPin; 2],
     collisions: u32,
     /// The true pose after every loop period of virtual time.
@@ -195,6 +197,7 @@ impl EmulatedRobot {
             rng,
             next_step_ns: NS_PER_TICK,
             pins: 0,
+            pins_known: false,
             servos: [ServoPin::default(); 2],
             collisions: 0,
             truth_log: std::vec![(0, cfg.start)],
@@ -293,6 +296,8 @@ impl EmulatedRobot {
     fn pins_changed(&mut self, t: u64, levels: u32) {
         let changed = levels ^ self.pins;
         self.pins = levels;
+        // The first report gives the levels at reset, not edges.
+        let first_report = !std::mem::replace(&mut self.pins_known, true);
         let high = |pin: u32| levels >> pin & 1 == 1;
         if changed >> FRONT_XSHUT & 1 == 1 {
             self.sensors.front.borrow_mut().set_xshut(high(FRONT_XSHUT));
@@ -302,7 +307,9 @@ impl EmulatedRobot {
         }
         for (pin, servo) in SERVO_PINS.iter().zip(self.servos.iter_mut()) {
             if changed >> pin & 1 == 1 {
-                if high(*pin) {
+                if first_report {
+                    servo.rise_ns = None;
+                } else if high(*pin) {
                     servo.rise_ns = Some(t);
                 } else if let Some(r) = servo.rise_ns.take() {
                     // a servo ignores what is no pulse (a pin settling at reset)
