@@ -9,7 +9,7 @@
 use std::path::Path;
 
 use super::events::{median_gap_ns, Events};
-use super::flash::boot_image_from_elf;
+use super::flash::compose;
 use super::qemu::{Board, Output, Session};
 use super::{banner, read, read_events, write_flash, INPUT_GAP_MS, SERVO_PINS};
 
@@ -205,13 +205,12 @@ fn stop(r: &mut Report, board: &Board, work: &Path, flash: &Path, e: &Expect) ->
 
 /// The test image stops feeding the watchdog after 0.5 s: the board must
 /// reset it two stages (2 x 0.84 s) later, and the ROM boot it again.
-fn watchdog(r: &mut Report, board: &Board, work: &Path) -> Result<(), String> {
+fn watchdog(r: &mut Report, root: &Path, board: &Board, work: &Path) -> Result<(), String> {
     const STARVE_NS: u64 = 500 * MS;
     const STAGES_NS: u64 = 2 * (1 << 26) * 1000 / 80; // 2 x 2^26 cycles at 80 MHz
-    let elf = read(&board.watchdog_test_elf())?;
-    let image = boot_image_from_elf(&elf)?;
+    let image = crate::esptool::boot_image(root, &board.watchdog_test_elf(), &work.join("selftest-wdt-"))?;
     let flash = work.join("selftest-wdt-flash.bin");
-    std::fs::write(&flash, image).map_err(|e| format!("{}: {e}", flash.display()))?;
+    std::fs::write(&flash, compose(&read(&image)?, &[])?).map_err(|e| format!("{}: {e}", flash.display()))?;
     let run = boot(board, work, "wdt", &flash, &[], 3.0, "")?;
     let resets = &run.events.watchdog_resets;
     let want = STARVE_NS + STAGES_NS;
@@ -251,7 +250,7 @@ pub fn run(root: &Path, board: &Board, work: &Path, boot_bin: &Path, irom_bin: &
     servo(&mut report, board, work, &flash, &expect)?;
     deadman(&mut report, board, work, &flash, &expect)?;
     stop(&mut report, board, work, &flash, &expect)?;
-    watchdog(&mut report, board, work)?;
+    watchdog(&mut report, root, board, work)?;
     println!("{} passed, {} failed", report.passed, report.failed);
     if report.failed > 0 {
         return Err(format!("fw-emu self-test: {} check(s) failed", report.failed));
