@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Builds the project's ESP8266 board (emu/esp8266.c) into Debian's QEMU 7.2
+# Builds the project's ESP8266 board (emu/esp8266*.[ch]) into Debian's QEMU 7.2
 # (an xtensa-only qemu-system-xtensa) and the board's ROM (emu/rom/), and
 # prints the directory that holds both:
 #
@@ -88,27 +88,56 @@ fetch_qemu_source() {
     touch "$qemu_src/.complete"
 }
 
-# The board's glue: its Kconfig symbol, on by default, and its file in meson.
+# The board's glue: its Kconfig symbol, on by default, and its files in meson.
 add_line_once() { # file line
     grep -qxF "$2" "$1" || printf '%s\n' "$2" >>"$1"
 }
 
+# The board's files (esp8266*.c, esp8266*.h), as installed in hw/xtensa/.
+board_files() { # c|h
+    (cd "$emu_dir" && LC_ALL=C ls -- esp8266*."$1")
+}
+
+# The board's lines in hw/xtensa/meson.build, one per C file, written afresh
+# (the lines for other files removed); the file is rewritten only when they
+# change, so meson reconfigures only then.
+set_meson_files() { # file.c...
+    local meson=$qemu_src/hw/xtensa/meson.build f
+    {
+        grep -vF "'CONFIG_XTENSA_ESP8266'" "$meson" || true
+        for f in "$@"; do
+            printf "xtensa_ss.add(when: 'CONFIG_XTENSA_ESP8266', if_true: files('%s'))\n" "$f"
+        done
+    } >"$meson.new"
+    if cmp -s "$meson.new" "$meson"; then rm "$meson.new"; else mv "$meson.new" "$meson"; fi
+}
+
+# The QEMU tree is shared by the builds of every checkout, whose boards may
+# have other files: each build lists its own files in meson and removes the
+# board's files it does not have.
 install_board_sources() {
-    add_line_once "$qemu_src/hw/xtensa/meson.build" \
-        "xtensa_ss.add(when: 'CONFIG_XTENSA_ESP8266', if_true: files('esp8266.c'))"
-    # the simulator link: self-contained, so another checkout's board that
-    # does not use it still links
-    add_line_once "$qemu_src/hw/xtensa/meson.build" \
-        "xtensa_ss.add(when: 'CONFIG_XTENSA_ESP8266', if_true: files('esp8266_link.c'))"
+    local dir=$qemu_src/hw/xtensa f
+    set_meson_files $(board_files c)
     if ! grep -q '^config XTENSA_ESP8266$' "$qemu_src/hw/xtensa/Kconfig"; then
         printf '\nconfig XTENSA_ESP8266\n    bool\n' >>"$qemu_src/hw/xtensa/Kconfig"
     fi
     add_line_once "$qemu_src/configs/devices/xtensa-softmmu/default.mak" "CONFIG_XTENSA_ESP8266=y"
-    # copy only when changed, so ninja rebuilds only what changed
-    local f
-    for f in esp8266.c esp8266_link.c esp8266_link.h; do
-        cmp -s "$emu_dir/$f" "$qemu_src/hw/xtensa/$f" || cp "$emu_dir/$f" "$qemu_src/hw/xtensa/$f"
+    for f in "$dir"/esp8266*.[ch]; do
+        if [ -e "$f" ] && [ ! -e "$emu_dir/$(basename "$f")" ]; then rm "$f"; fi
     done
+    # copy only when changed, so ninja rebuilds only what changed
+    for f in $(board_files c) $(board_files h); do
+        cmp -s "$emu_dir/$f" "$dir/$f" || cp "$emu_dir/$f" "$dir/$f"
+    done
+}
+
+# A checkout whose build-qemu.sh predates the board's split into files adds
+# only the esp8266.c and esp8266_link.c lines, once, and copies its single
+# esp8266.c: the other files' lines would break its build (their functions
+# are static there). So the tree is left with those two lines alone, after
+# a build and after a failed one.
+leave_meson_for_single_file_boards() {
+    set_meson_files esp8266.c esp8266_link.c
 }
 
 build_qemu() {
@@ -142,6 +171,7 @@ build_test_image() { # out.elf
 
 install_missing_packages
 fetch_qemu_source
+trap leave_meson_for_single_file_boards EXIT
 install_board_sources
 build_qemu
 tmp=$(mktemp -d "$cache/emu-tmp.XXXXXX")

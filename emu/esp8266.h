@@ -1,0 +1,200 @@
+/*
+ * esp8266: the board's private header. The machine's state (one struct for
+ * every part), the memory map and peripheral offsets (ESP8266 Technical
+ * Reference (TRM), memory map; the WDT and GPIO16 blocks from the esp8266
+ * PAC's SVD), and what each of the board's files gives the others. What the
+ * board models, and its options: esp8266.c.
+ *
+ * SPDX-License-Identifier: GPL-2.0-or-later
+ */
+
+#ifndef HW_XTENSA_ESP8266_H
+#define HW_XTENSA_ESP8266_H
+
+#include "qemu/units.h"
+#include "qemu/timer.h"
+#include "cpu.h"
+#include "hw/boards.h"
+#include "exec/memory.h"
+#include "chardev/char-fe.h"
+#include "qom/object.h"
+#include "esp8266_link.h"
+
+#define TYPE_ESP8266_MACHINE MACHINE_TYPE_NAME("esp8266")
+OBJECT_DECLARE_SIMPLE_TYPE(Esp8266State, ESP8266_MACHINE)
+
+/* The clock the HAL sets up; CCOUNT, FRC1 and the UART run from it. */
+#define CPU_HZ            80000000ULL
+
+/* Memory map (TRM, memory map). */
+#define DRAM_BASE         0x3ffe8000u
+#define DRAM_SIZE         0x18000u       /* 96 KiB, up to 0x40000000 */
+#define ROM_BASE          0x40000000u
+#define ROM_SIZE          (64 * KiB)
+#define IRAM_BASE         0x40100000u
+#define IRAM_SIZE         (32 * KiB)
+#define FLASH_MAP_BASE    0x40200000u
+#define FLASH_MAP_SIZE    (1 * MiB)
+#define FLASH_MAX_SIZE    (16 * MiB)
+#define DPORT_BASE        0x3ff00000u
+#define DPORT_SIZE        0x100u
+#define PERIPH_BASE       0x60000000u
+#define PERIPH_SIZE       0x1000u
+#define RTC_MEM_BASE      0x60001000u
+#define RTC_MEM_SIZE      (1 * KiB)
+
+/* Peripheral blocks, offsets from PERIPH_BASE (TRM / PAC). */
+#define UART0_OFFSET      0x000
+#define GPIO_OFFSET       0x300
+#define FRC1_OFFSET       0x600
+#define RTC_OFFSET        0x700
+#define IO_MUX_OFFSET     0x800
+#define WDT_OFFSET        0x900
+#define RTC_CNTL_OFFSET   0xd00
+
+/* CPU interrupt of FRC1 (core-isa.h: interrupt 9 is external, edge). */
+#define FRC1_CPU_IRQ      9
+/* DPORT EDGE_INT_ENABLE: bit 1 lets FRC1's edge interrupt through. */
+#define DPORT_EDGE_INT_ENABLE   0x04
+#define EDGE_INT_FRC1           (1u << 1)
+
+#define NUM_GPIO          16      /* GPIO0..15; GPIO16 is the RTC's */
+#define UART_FIFO_LEN     128
+
+/* ---- the machine's state ------------------------------------------------ */
+
+/* A block we accept without modelling: plain registers (esp8266.c). */
+typedef struct RegFile {
+    const char *name;
+    hwaddr base;
+    unsigned size;
+    bool log_unimp;         /* log each register's first read and write */
+    uint32_t *regs;
+    uint8_t *logged;        /* bit 0: read logged, bit 1: write logged */
+} RegFile;
+
+typedef struct Fifo {
+    uint8_t data[UART_FIFO_LEN];
+    unsigned head, count;
+} Fifo;
+
+struct Esp8266State {
+    MachineState parent;
+
+    XtensaCPU *cpu;
+    char *rom_path, *flash_path, *events_path;
+    char *input_path, *input_after;
+    uint32_t input_gap_ms, stop_ms;
+    FILE *events;
+    QEMUTimer *stop_timer;
+    bool stopped;               /* past stop-ms: nothing more leaves the board */
+
+    MemoryRegion flash_mr, dport_mr, periph_mr, uart_mr, gpio_mr, rtc_mr,
+                 frc1_mr, wdt_mr;
+    RegFile dport, periph, rtc, io_mux, rtc_cntl;
+
+    /* UART0 */
+    CharBackend chr;
+    Fifo tx, rx;
+    uint32_t uart_int_raw, uart_int_ena, uart_clkdiv, uart_conf0, uart_conf1;
+    QEMUTimer *tx_timer;
+    /* deterministic input (uart-input) */
+    uint8_t *input;
+    size_t input_len, input_pos;
+    size_t after_matched;       /* bytes of input_after matched so far */
+    bool input_started;
+    QEMUTimer *input_timer;
+
+    /* GPIO */
+    uint32_t gpio_out, gpio_enable, gpio_pin[NUM_GPIO];
+    uint32_t gpio_levels;       /* GPIO0..15, bit 16 = GPIO16 */
+    uint32_t rtc_gpio_out, rtc_gpio_enable;
+
+    /* the simulator (sim=PATH): see esp8266_sim.c */
+    char *sim_path;
+    Esp8266Link *link;
+    uint32_t driven;            /* levels the chip drives, before the slaves */
+    uint32_t ext_low;           /* pins a slave pulls low */
+    bool link_dirty;            /* an edge the slaves may answer since the last sync */
+    int64_t link_valid_until;
+    QEMUTimer *link_wake_timer, *link_rx_timer;
+    Fifo link_rx;               /* bytes for UART0 RX, one per frame time */
+
+    /* PC sampling (profile=FILE) */
+    char *profile_path;
+    uint32_t profile_ns;
+    uint64_t profile_samples;
+    int64_t profile_start_ns;   /* with sim=: from the loop's start */
+    GHashTable *profile;
+    QEMUTimer *profile_timer;
+
+    /* FRC1 */
+    uint32_t frc1_load, frc1_ctrl, frc1_count_at_start;
+    bool frc1_int_pending;
+    int64_t frc1_start_ns;
+    QEMUTimer *frc1_timer;
+    qemu_irq frc1_irq;
+
+    /* watchdog */
+    uint32_t wdt_ctl, wdt_op, wdt_op_nd;
+    unsigned wdt_stage;
+    QEMUTimer *wdt_timer;
+};
+
+static inline int64_t now_ns(void)
+{
+    return qemu_clock_get_ns(QEMU_CLOCK_VIRTUAL);
+}
+
+static inline int64_t cycles_to_ns(uint64_t cycles)
+{
+    return muldiv64(cycles, NANOSECONDS_PER_SECOND, CPU_HZ);
+}
+
+/* esp8266.c: the machine */
+void log_event(Esp8266State *s, const char *fmt, ...) G_GNUC_PRINTF(2, 3);
+uint32_t regfile_read(RegFile *f, hwaddr addr);
+void regfile_write(RegFile *f, hwaddr addr, uint32_t v);
+void esp8266_reset(void *opaque);
+void stop_expired(void *opaque);
+
+/* esp8266_uart.c: UART0 */
+extern const MemoryRegionOps uart_ops;
+bool fifo_push(Fifo *f, uint8_t b);
+uint8_t fifo_pop(Fifo *f);
+int64_t uart_frame_ns(Esp8266State *s);
+void uart_receive_byte(Esp8266State *s, uint8_t b);
+void uart_tx_done(void *opaque);
+void input_tick(void *opaque);
+int uart_can_receive(void *opaque);
+void uart_receive(void *opaque, const uint8_t *buf, int size);
+void uart_reset(Esp8266State *s);
+void load_uart_input(Esp8266State *s);
+
+/* esp8266_gpio.c: GPIO0..15 and GPIO16 (the RTC block) */
+extern const MemoryRegionOps gpio_ops, rtc_ops;
+uint32_t gpio_driven_levels(Esp8266State *s);
+uint32_t gpio_compute_levels(Esp8266State *s);
+void gpio_update(Esp8266State *s);
+void gpio_reset(Esp8266State *s);
+
+/* esp8266_sim.c: the wire to the simulator (sim=PATH) */
+void link_note_pins(Esp8266State *s, uint32_t driven);
+void link_refresh(Esp8266State *s);
+void link_start(Esp8266State *s);
+
+/* esp8266_profile.c: PC sampling (profile=FILE) */
+void profile_tick(void *opaque);
+void profile_write(Esp8266State *s);
+
+/* esp8266_timers.c: FRC1 */
+extern const MemoryRegionOps timer_block_ops;
+void frc1_expired(void *opaque);
+void frc1_reset(Esp8266State *s);
+
+/* esp8266_wdt.c: the watchdog */
+extern const MemoryRegionOps wdt_ops;
+void wdt_expired(void *opaque);
+void wdt_reset(Esp8266State *s);
+
+#endif
