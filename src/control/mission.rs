@@ -3,7 +3,7 @@
 //!
 //! A [`Step`] is one command a mission may hold: a timed motion, a wait,
 //! `goto`, `face` or `pose`. A [`Mission`] keeps up to
-//! [`config::mission::MAX_STEPS`] of them. So that a reset does not lose
+//! [`crate::config::mission::MAX_STEPS`] of them. So that a reset does not lose
 //! it, the firmware copies it into a [`MissionStore`] whenever it changes
 //! ([`Mission::encode`]: a magic word, the count, three words a step and a
 //! checksum) and reads it back at boot ([`Mission::decode`], which refuses

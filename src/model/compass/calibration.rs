@@ -96,7 +96,7 @@ impl MagCalibrator {
     /// A sweep over `samples` samples that must visit `min_sectors`
     /// sectors; samples whose horizontal vector is shorter than
     /// `min_radius` counts (larger component) visit no sector. `asa` is the
-    /// chip's sensitivity adjustment ([`super::MagCalibrate::asa`]): the
+    /// chip's sensitivity adjustment (its ASA, read by the compass driver): the
     /// biases are in ASA-adjusted counts, like [`MagCalibration`]'s.
     pub fn new(asa: [u8; 3], axes: AxisMap, samples: u16, min_sectors: u8, min_radius: i32) -> Self {
         MagCalibrator {
