@@ -466,6 +466,41 @@ pub mod sim {
     /// Half the car's width at the wheels, mm (the 85 mm axle): a wheel
     /// that would pass a wall is a collision.
     pub const HALF_TRACK_MM: f64 = 42.5;
+
+    // The realistic simulator's effects (`sim::realism`; each an option of
+    // `simulate`).
+
+    /// Trial-to-trial spread of the speed, one sigma, fraction, per motion
+    /// (forward, backward, clockwise, counter-clockwise): each motion runs at
+    /// its line's speed times one factor drawn for it. Data `servo_runs.csv`:
+    /// the rms over the five command pairs of the ten timed runs' relative
+    /// spread, 1.9 %, 2.5 %, 2.6 %, 1.1 %.
+    pub const SPEED_SPREAD: [f64; 4] = [0.019, 0.025, 0.026, 0.011];
+    /// A turn in place pivots about a point this far behind the axle's
+    /// midpoint on average, mm: the paper skid drags ~70 mm behind the axle
+    /// (PAPERBOT) and holds the tail back. Not measured (the lab timed turns
+    /// only); 10 mm, a seventh of the way to the skid, is an assumption.
+    pub const PIVOT_BEHIND_AXLE_MM: f64 = 10.0;
+    /// Spread of that point from turn to turn, one sigma, mm (assumed, as
+    /// the mean: the skid's grip changes with the paper and the floor).
+    pub const PIVOT_SPREAD_MM: f64 = 5.0;
+    /// The VL53L0X's field of view, full cone angle, degrees (ST's
+    /// datasheet: 25 degrees): a reading is the nearest surface in the
+    /// cone (PAPERBOT lab 2 README).
+    pub const LIDAR_CONE_DEG: f64 = 25.0;
+    /// Readings start failing past this incidence of the beam's axis on the
+    /// wall, degrees, all fail at 90 (the lab 2 README: glancing readings
+    /// fail; the lab measured square on only, so the onset is assumed).
+    pub const GLANCING_DEG: f64 = 60.0;
+    /// Of the failed readings, the share that is a spurious echo (0.3 to 1.5
+    /// times the true distance) rather than "no target" (assumed).
+    pub const SPURIOUS_SHARE: f64 = 0.3;
+    /// Compass disturbance: amplitude of the heading error that varies over
+    /// the floor, degrees (assumed: within the lab's 2.5-degree spread
+    /// against a printed compass, data `magnetometer_heading.csv`).
+    pub const COMPASS_DISTURBANCE_DEG: f64 = 2.0;
+    /// Wavelength of that pattern over the floor, mm (about the box's length).
+    pub const COMPASS_DISTURBANCE_WAVELENGTH_MM: f64 = 800.0;
 }
 
 /// The teleop tool (`examples/teleop.rs`, `host::teleop`; host only).

@@ -8,6 +8,7 @@ use paperbot::math::{Speed, TurnRate};
 use paperbot::model::{Motion, Range};
 use paperbot::sim::arena::Arena;
 use paperbot::sim::body::{Kinematics, PoseF64};
+use paperbot::sim::realism::Realism;
 use paperbot::sim::robot::{Noise, SimConfig, SimRobot};
 use paperbot::sim::script::{default_script, Script};
 use std::f64::consts::{FRAC_PI_2, PI};
@@ -63,7 +64,7 @@ fn the_default_script_is_valid_and_lasts_the_duration() {
 // ---- exact runs against the f64 reference ----------------------------
 
 fn exact(kinematics: Kinematics, start: PoseF64) -> SimRobot {
-    SimRobot::new(SimConfig { noise: Noise::OFF, kinematics, start, ..SimConfig::default() })
+    SimRobot::new(SimConfig { noise: Noise::OFF, kinematics, start, realism: Realism::IDEAL, ..SimConfig::default() })
 }
 
 /// The model's motion for a `fwd`/`cw` request (what the loop drives).
@@ -156,7 +157,9 @@ fn the_state_update_follows_a_rigid_turn_not_the_reports_printed_form() {
 #[test]
 fn lidars_and_compass_read_the_true_pose_through_the_fake_chips() {
     let start = PoseF64::new(300.0, 150.0, 30f64.to_radians());
-    let mut robot = SimRobot::new(SimConfig { start, ..SimConfig::default() });
+    // thin rays, no disturbance: the readings are the ray's (the cone's are
+    // tested in sim::realism's tests)
+    let mut robot = SimRobot::new(SimConfig { start, realism: Realism::IDEAL, ..SimConfig::default() });
     robot.send("rate 0");
     let a = robot.cfg.arena;
     let (mut fronts, mut rights, mut headings) = (vec![], vec![], vec![]);
@@ -209,7 +212,10 @@ fn the_default_minute_drives_laps_without_touching_a_wall() {
     assert_eq!(robot.collisions(), 0);
     let a = robot.cfg.arena;
     let min_clearance = samples.iter().map(|s| a.clearance(s.truth.x, s.truth.y)).fold(f64::MAX, f64::min);
-    assert!(min_clearance > 30.0, "{min_clearance}");
+    // the realistic robot's speeds and pivots spread from run to run, so
+    // its open-loop laps wander (24 mm from a wall at seed 1; the ideal
+    // robot's stay 30 mm clear), but the whole body stays off the walls
+    assert!(min_clearance > 15.0, "{min_clearance}");
     // it went around: both ends of the box visited
     let xs: Vec<f64> = samples.iter().map(|s| s.truth.x).collect();
     assert!(xs.iter().cloned().fold(f64::MAX, f64::min) < 150.0 && xs.iter().cloned().fold(0.0, f64::max) > 550.0);
@@ -365,4 +371,38 @@ fn a_turn_in_the_simulator_leaves_z_alone() {
     };
     assert!(spread(0) > 200 && spread(1) > 200, "x and y sweep: {} {}", spread(0), spread(1));
     assert_eq!(spread(2), 0, "z moved while turning");
+}
+
+// ---- the realistic effects ----------------------------------------------
+
+/// The cone's reading is the nearest wall point in the cone: against a
+/// brute-force minimum over 2,001 thin rays across it, from random points
+/// and directions in the box; and the thin ray's length with the cone off.
+#[test]
+fn the_lidar_cone_reads_the_nearest_wall_in_it() {
+    use paperbot::sim::realism::lidar_range;
+    let a = Arena::default();
+    let lab = Realism::LAB;
+    let half = lab.cone_deg.to_radians() / 2.0;
+    let mut rng = paperbot::sim::noise::Rng::new(5);
+    let mut worst: f64 = 0.0;
+    let mut shorter = 0;
+    for _ in 0..2_000 {
+        let (x, y) = (rng.range_f64(1.0, a.length_x - 1.0), rng.range_f64(1.0, a.width_y - 1.0));
+        let dir = rng.range_f64(0.0, 2.0 * PI);
+        let (t, _) = lidar_range(&a, x, y, dir, &lab).unwrap();
+        let brute = (0..=2000)
+            .map(|i| a.ray_cast(x, y, dir - half + 2.0 * half * f64::from(i) / 2000.0).unwrap())
+            .fold(f64::MAX, f64::min);
+        // the brute force samples the cone: at most a little above the true minimum
+        assert!(t <= brute + 1e-6 && brute - t < 0.05 + 1e-4 * brute, "{x} {y} {dir}: cone {t}, rays {brute}");
+        worst = worst.max(brute - t);
+        let thin = lidar_range(&a, x, y, dir, &Realism::IDEAL).unwrap().0;
+        assert!((thin - a.ray_cast(x, y, dir).unwrap()).abs() < 1e-9);
+        if t < thin - 1.0 {
+            shorter += 1;
+        }
+    }
+    println!("cone vs 2,001 rays: worst {worst:.4} mm; shorter than the thin ray by > 1 mm in {shorter} of 2,000");
+    assert!(shorter > 1_000, "the cone matters at most angles");
 }

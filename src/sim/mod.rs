@@ -9,6 +9,7 @@ pub mod body;
 pub mod bus;
 pub mod mpu9250;
 pub mod noise;
+pub mod realism;
 pub mod robot;
 pub mod script;
 pub mod sensors;
