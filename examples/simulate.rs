@@ -11,7 +11,7 @@
 //!   --seed N           noise seed (default 1)
 //!   --no-noise         exact run: no motion, lidar or compass noise
 //!   --kinematics K     rigid (default) or report (the report's turn equations)
-//!   --ideal            turn every realistic effect below off (thin rays, rigid turns, ...)
+//!   --ideal            turn the realistic effects below off but the cone (rigid turns, ...)
 //!   --body B           whole (default: lidars and skid kept in the box too) or wheels
 //!   --speed-spread F   trial-to-trial speed spread, one sigma, all motions (default: the lab's per motion)
 //!   --pivot MM,SD      turns pivot MM behind the axle, SD from turn to turn (default 10,5)

@@ -126,6 +126,11 @@ pub mod lidar {
     /// gives 0.9867 / -70.4605).
     pub const RIGHT: LidarModel = LidarModel::new(0.9867, -70.4578, MIN_DISTANCE_MM, MAX_READING_MM);
 
+    /// The VL53L0X's field of view, full cone angle, degrees (ST's
+    /// datasheet: 25 degrees): it reads the nearest surface in the cone, so
+    /// the estimator's measurement model takes the cone's direction nearest
+    /// a wall's normal (`model::measurement`).
+    pub const CONE_DEG: f64 = 25.0;
     /// Measurement timing budget, us (VL53L0X default 33 ms; at most one
     /// reading per 33 ms per lidar).
     pub const TIMING_BUDGET_US: u32 = 33_000;
@@ -386,6 +391,13 @@ pub mod estimator {
     /// The same for turns, degrees of turning (one 90-degree turn: the
     /// drives the estimator is tested on turn by quarter turns).
     pub const TURN_CORRELATION_DEG: f64 = 90.0;
+    /// A turn in place does not pivot exactly about the axle: the paper skid
+    /// drags (PAPERBOT) and moves the pivot by this much, one sigma, mm. The
+    /// estimator adds it as position noise across the car per angle turned
+    /// (a random walk over `TURN_CORRELATION_DEG`), so after a turn it
+    /// follows the lidars instead of gating them out. The simulator's pivot
+    /// (`sim::PIVOT_BEHIND_AXLE_MM` and its spread) lies within it.
+    pub const PIVOT_SIGMA_MM: f64 = 12.0;
     /// Extra position noise always added, mm^2 per second: keeps the
     /// covariance a margin away from singular (a turn's noise is rank one)
     /// and from collapsing while the robot stands still; 0.7 mm after a
@@ -436,6 +448,39 @@ pub mod estimator {
     pub const ARENA_MARGIN: Length = Length::from_mm_f64(50.0);
 }
 
+/// Localization (`model::locate`): where in the box the robot is, searched
+/// at power-up and on `locate` from the compass and the two lidars.
+pub mod locate {
+    /// Grid step of the search, mm: 15,000 points in the team's box, each
+    /// two lidar models (about 0.2 s on the lx106, lx106/BENCHMARKS.md).
+    pub const GRID_MM: i32 = 5;
+    /// A grid point explains a reading within this, mm: three lidar sigmas
+    /// (`estimator::LIDAR_SIGMA`: 6 mm), half the grid's diagonal (3.5 mm),
+    /// and what the compass's spread (2.5 degrees, `estimator::
+    /// COMPASS_SIGMA_DEG`) moves an oblique beam's reading at typical
+    /// ranges (a few mm).
+    pub const TOLERANCE_MM: f64 = 12.0;
+    /// Points that explain the readings spread over more than this on an
+    /// axis: the fix is ambiguous (reported as such), mm. Two tolerances
+    /// and a grid step over the span of one point's neighbourhood.
+    pub const AMBIGUOUS_SPAN_MM: i32 = 60;
+    /// When nothing fits at the compass's heading, the search tries headings
+    /// this far apart, degrees (the compass's 2.5-degree spread, `estimator::
+    /// COMPASS_SIGMA_DEG`) ...
+    pub const HEADING_STEP_DEG: f64 = 2.5;
+    /// ... up to this many each way (30 degrees: the real drive's compass,
+    /// `tests/data/lab2/drive1.csv`, is fitted by no pose within 10 degrees
+    /// of its first reading; the box is only roughly aligned with north).
+    pub const HEADING_STEPS: u8 = 12;
+    /// Readings averaged before the search, per lidar: five lidar periods
+    /// (0.17 s) take the lidar's 1.6 mm spread below 1 mm.
+    pub const LIDAR_READINGS: u8 = 5;
+    /// Compass readings averaged: 0.2 s at 100 Hz; the compass's spread
+    /// against the truth is mostly per heading, not per reading, so more
+    /// would not help (data `magnetometer_heading.csv`).
+    pub const COMPASS_READINGS: u8 = 20;
+}
+
 /// The simulated robot (`sim`, host only; f64 is fine: nothing here reaches
 /// the robot). Noise levels from the lab's data where it has them.
 pub mod sim {
@@ -484,10 +529,8 @@ pub mod sim {
     /// Spread of that point from turn to turn, one sigma, mm (assumed, as
     /// the mean: the skid's grip changes with the paper and the floor).
     pub const PIVOT_SPREAD_MM: f64 = 5.0;
-    /// The VL53L0X's field of view, full cone angle, degrees (ST's
-    /// datasheet: 25 degrees): a reading is the nearest surface in the
-    /// cone (PAPERBOT lab 2 README).
-    pub const LIDAR_CONE_DEG: f64 = 25.0;
+    /// The lidar's cone, full angle, degrees: the sensor's (`lidar::CONE_DEG`).
+    pub const LIDAR_CONE_DEG: f64 = super::lidar::CONE_DEG;
     /// Readings start failing past this incidence of the beam's axis on the
     /// wall, degrees, all fail at 90 (the lab 2 README: glancing readings
     /// fail; the lab measured square on only, so the onset is assumed).

@@ -179,9 +179,14 @@ fn lidars_and_compass_read_the_true_pose_through_the_fake_chips() {
     }
     let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
     let sd = |v: &[f64]| (v.iter().map(|x| (x - mean(v)).powi(2)).sum::<f64>() / v.len() as f64).sqrt();
-    // truth: along the beams from the reference point (both beams pass through it)
-    let front_truth = a.ray_cast(start.x, start.y, start.theta).unwrap();
-    let right_truth = a.ray_cast(start.x, start.y, start.theta + FRAC_PI_2).unwrap();
+    // truth: the nearest wall in each lidar's cone, less the mount's setback
+    // (both mounts sit on their beams' lines through the reference point)
+    let truth = |mount: &paperbot::model::LidarMount, setback: f64| {
+        let (x, y, dir) = start.lidar_ray(mount);
+        paperbot::sim::realism::lidar_range(&a, x, y, dir, &Realism::IDEAL).unwrap().0 - setback
+    };
+    let front_truth = truth(&config::geometry::FRONT_LIDAR, 50.0);
+    let right_truth = truth(&config::geometry::RIGHT_LIDAR, 53.0);
     assert!((mean(&fronts) - front_truth).abs() < 1.5, "front {} vs {front_truth}", mean(&fronts));
     assert!((mean(&rights) - right_truth).abs() < 1.5, "right {} vs {right_truth}", mean(&rights));
     // the fake chip reports whole mm of reading, so a little more than the 1.6 mm noise
@@ -397,7 +402,7 @@ fn the_lidar_cone_reads_the_nearest_wall_in_it() {
         // the brute force samples the cone: at most a little above the true minimum
         assert!(t <= brute + 1e-6 && brute - t < 0.05 + 1e-4 * brute, "{x} {y} {dir}: cone {t}, rays {brute}");
         worst = worst.max(brute - t);
-        let thin = lidar_range(&a, x, y, dir, &Realism::IDEAL).unwrap().0;
+        let thin = lidar_range(&a, x, y, dir, &Realism { cone_deg: 0.0, ..Realism::IDEAL }).unwrap().0;
         assert!((thin - a.ray_cast(x, y, dir).unwrap()).abs() < 1e-9);
         if t < thin - 1.0 {
             shorter += 1;

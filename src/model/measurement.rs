@@ -40,7 +40,7 @@
 //! heading clockwise from north, in the same frame ([`expected_heading`]).
 
 use crate::config;
-use crate::math::{mul_hi, mul_q30, sin_cos, Angle, Coord, Length};
+use crate::math::{mul_hi, mul_q30, mul_q30_unsat, sin_cos, Angle, Coord, Length};
 use crate::model::lidar::LidarMount;
 use crate::model::state::Pose;
 
@@ -121,29 +121,141 @@ fn coord_length(c: Coord) -> Length {
     }
 }
 
-/// The geometry of one lidar beam in the arena for one pose: which wall it
-/// meets first, and how squarely.
+/// cos and sin of half the lidar's cone (Q2.30), from the config.
+const COS_HALF_CONE: i32 = crate::math::round_f64(
+    crate::math::cos_f64(config::lidar::CONE_DEG / 2.0 * core::f64::consts::TAU / 360.0) * 1_073_741_824.0,
+) as i32;
+const SIN_HALF_CONE: i32 = crate::math::round_f64(
+    crate::math::cos_f64((90.0 - config::lidar::CONE_DEG / 2.0) * core::f64::consts::TAU / 360.0) * 1_073_741_824.0,
+) as i32;
+const ONE: i32 = 1 << 30;
+
+/// The four products of the axis's `|cos|`, `|sin|` (Q2.30) with the half
+/// cone's cosine and sine, from which both walls' cone incidences follow
+/// ([`Cone::toward`]): `cos(a - h) = cos a cos h + sin a sin h`,
+/// `sin(a - h) = sin a cos h - cos a sin h`.
+#[derive(Clone, Copy)]
+struct Cone {
+    c_ch: i32,
+    s_sh: i32,
+    s_ch: i32,
+    c_sh: i32,
+}
+
+impl Cone {
+    // tick bar: four products shared by both walls
+    #[inline(always)]
+    fn new(abs_c: i32, abs_s: i32) -> Cone {
+        // |c|, |s| <= 2^30 and the half cone's below: each product below 2^30
+        Cone {
+            c_ch: mul_q30_unsat(abs_c, COS_HALF_CONE),
+            s_sh: mul_q30_unsat(abs_s, SIN_HALF_CONE),
+            s_ch: mul_q30_unsat(abs_s, COS_HALF_CONE),
+            c_sh: mul_q30_unsat(abs_c, SIN_HALF_CONE),
+        }
+    }
+
+    /// `(cos, sin)` of the incidence of the cone's direction nearest the
+    /// normal of a wall of constant x (`x_wall`) or y, ahead of the axis
+    /// (`ahead`) or behind it: `(1, 0)` when the normal is in the cone; a
+    /// cosine at or below 0 means the wall is not in the cone.
+    // tick bar
+    #[inline(always)]
+    fn toward(&self, x_wall: bool, ahead: bool) -> (i32, i32) {
+        // the axis's |cos incidence| n and |sin| t on that wall, times cos h and sin h
+        let (n_ch, t_sh, t_ch, n_sh) = if x_wall {
+            (self.c_ch, self.s_sh, self.s_ch, self.c_sh)
+        } else {
+            (self.s_ch, self.c_sh, self.c_ch, self.s_sh)
+        };
+        if !ahead {
+            // cos incidence -n: cos(a - h) = -n ch + t sh, sin(a - h) = t ch + n sh
+            return (t_sh - n_ch, t_ch + n_sh);
+        }
+        if n_ch >= COS_HALF_SQ {
+            (ONE, 0)
+        } else {
+            (n_ch + t_sh, t_ch - n_sh)
+        }
+    }
+}
+
+/// `cos^2` of half the cone (Q2.30): the axis's `|cos| cos h` is at least
+/// this exactly when `|cos| >= cos h`, the wall's normal inside the cone.
+const COS_HALF_SQ: i32 = crate::math::round_f64(
+    crate::math::cos_f64(config::lidar::CONE_DEG / 2.0 * core::f64::consts::TAU / 360.0)
+        * crate::math::cos_f64(config::lidar::CONE_DEG / 2.0 * core::f64::consts::TAU / 360.0)
+        * 1_073_741_824.0,
+) as i32;
+
+/// Of two opposite walls at distances `a` (the one the axis heads for) and
+/// `b` along their normal, with the axis's `|cos|` on them `n`: whether
+/// `b`'s wall is nearer in the cone, and the chosen wall's distance and
+/// cone cosine and sine. The far wall is in the cone only when the axis is
+/// within half the cone of parallel to it.
+// tick bar: the second wall only when the axis runs near parallel
+#[inline(always)]
+fn nearer_of(cone: &Cone, x_wall: bool, n: i32, a: Length, b: Length) -> (bool, Length, (i32, i32)) {
+    let ca = cone.toward(x_wall, true);
+    if n > SIN_HALF_CONE {
+        return (false, a, ca);
+    }
+    let cb = cone.toward(x_wall, false);
+    if cb.0 <= 0 {
+        return (false, a, ca);
+    }
+    // a / ca <= b / cb, i.e. a cb <= b ca (each distance clamped at 0)
+    if ca.0 > 0 && mul_hi(a.0.max(0), cb.0) <= mul_hi(b.0.max(0), ca.0) {
+        (false, a, ca)
+    } else {
+        (true, b, cb)
+    }
+}
+
+/// A mount offset times a sine or cosine (Q2.30), skipped for a zero
+/// offset (each config mount has one).
+// tick bar
+#[inline(always)]
+fn mount_product(l: Length, t: i32) -> i32 {
+    if l.0 == 0 {
+        0
+    } else {
+        mul_q30_unsat(l.0, t) // |t| <= 2^30: below |l|
+    }
+}
+
+/// The geometry of one lidar reading in the arena for one pose: which wall
+/// the nearest point in the lidar's cone is on, and how the reading
+/// depends on the pose (see the module docs).
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
 pub struct Beam {
-    /// The wall the beam meets first.
+    /// The wall the nearest point in the cone is on.
     pub wall: Wall,
-    /// Beam direction `phi` (clockwise from north).
+    /// Beam (axis) direction `phi` (clockwise from north).
     pub direction: Angle,
     /// `(sin phi, cos phi)` in Q2.30.
     pub sin: i32,
     pub cos: i32,
-    /// `|cos incidence|` in Q2.30: `|cos phi|` for an x-wall, `|sin phi|`
-    /// for a y-wall. 1 when the beam hits the wall square on.
+    /// `|cos incidence|` of the axis on the wall in Q2.30. 1 when the beam
+    /// hits the wall square on.
     pub normal: i32,
-    /// Distance from the beam origin to the wall, along the wall's normal
-    /// (negative if the origin is outside the box).
+    /// The cone's: cos of the incidence of the cone's direction nearest the
+    /// wall's normal (1 inside the cone; see [`cone`]), and its sine.
+    pub cone_normal: i32,
+    cone_tangent: i32,
+    /// Distance from the lidar to the wall, along the wall's normal
+    /// (negative if the lidar is outside the box).
     pub to_wall: Length,
-    /// The other wall's distance along its own normal, and that wall's
-    /// `|cos incidence|` (for the corner test).
+    /// The other candidate wall's distance along its own normal, and its
+    /// cone cosine (for the corner test).
     other_to_wall: Length,
     other_normal: i32,
-    /// The mount's offset across its beam (`lateral`, see the module docs).
-    pub lateral: Length,
+    /// How far the lidar sits behind the reference point along its beam
+    /// (the model output is the range from the lidar less this).
+    pub setback: Length,
+    /// The lidar position's share of `d(reading)/d(heading)` (see
+    /// [`Beam::heading_lever`]).
+    mount_lever: Length,
 }
 
 impl Beam {
@@ -157,7 +269,6 @@ impl Beam {
         // a copy: `Pose::sin_cos` refreshes its cache, and only reads it when current
         let (st, ct) = { *pose }.sin_cos();
         // |sin|, |cos| <= 2^30: the negations cannot overflow.
-        const ONE: i32 = 1 << 30;
         let ((sin, cos), (sd, cd)) = match mount.direction {
             Angle::ZERO => ((st, ct), (0, ONE)),
             Angle::QUARTER_TURN => ((ct, -st), (ONE, 0)),
@@ -165,109 +276,133 @@ impl Beam {
             Angle(THREE_QUARTERS) => ((-ct, st), (-ONE, 0)),
             _ => (sin_cos(direction), sin_cos(mount.direction)),
         };
-        // lateral = -forward sin(dir) + right cos(dir), in the car's frame
-        // (exact for quarter turns; the negations saturate).
-        let lateral = match mount.direction {
-            Angle::ZERO => mount.right,
-            Angle::QUARTER_TURN => Length::ZERO.saturating_sub(mount.forward),
-            Angle::HALF_TURN => Length::ZERO.saturating_sub(mount.right),
-            Angle(THREE_QUARTERS) => mount.forward,
-            _ => Length(mul_q30(mount.right.0, cd).saturating_sub(mul_q30(mount.forward.0, sd))),
+        // setback = -(mount . beam) in the car's frame (exact for quarter turns)
+        let (f, r) = (mount.forward, mount.right);
+        let setback = match mount.direction {
+            Angle::ZERO => Length::ZERO.saturating_sub(f),
+            Angle::QUARTER_TURN => Length::ZERO.saturating_sub(r),
+            Angle::HALF_TURN => f,
+            Angle(THREE_QUARTERS) => r,
+            _ => Length(-(mul_q30(f.0, cd).saturating_add(mul_q30(r.0, sd)))),
         };
-        // Beam origin o = p + lateral (-sin phi, cos phi): the reference
-        // point itself for a mount on its beam's line (both config mounts).
-        let (px, py) = (coord_length(pose.x), coord_length(pose.y));
-        let (ox, oy) = if lateral.0 == 0 {
-            (px, py)
-        } else {
-            (px.saturating_sub(Length(mul_q30(lateral.0, sin))), py.saturating_add(Length(mul_q30(lateral.0, cos))))
-        };
-        let (x_wall, ax) = if cos >= 0 { (Wall::North, arena.length_x.saturating_sub(ox)) } else { (Wall::South, ox) };
-        let (y_wall, ay) = if sin >= 0 { (Wall::East, arena.width_y.saturating_sub(oy)) } else { (Wall::West, oy) };
+        // The lidar: p + f (cos th, sin th) + r (-sin th, cos th); each
+        // component's products only when it is not zero (each config mount
+        // has one). fx = f cos - r sin, fy = f sin + r cos.
+        let dx = mount_product(f, ct).saturating_sub(mount_product(r, st));
+        let dy = mount_product(f, st).saturating_add(mount_product(r, ct));
+        let lx = coord_length(pose.x).saturating_add(Length(dx));
+        let ly = coord_length(pose.y).saturating_add(Length(dy));
         // |sin|, |cos| <= 2^30: the absolute values cannot overflow.
         let (abs_s, abs_c) = (sin.wrapping_abs(), cos.wrapping_abs());
-        // x-wall first when A_x / |c| <= A_y / |s|, i.e. A_x |s| <= A_y |c|
-        // (a negative A, an origin outside the box, counts as 0).
-        let tx = mul_hi(ax.0.max(0), abs_s);
-        let ty = mul_hi(ay.0.max(0), abs_c);
-        if tx <= ty {
-            Beam {
-                wall: x_wall,
-                direction,
-                sin,
-                cos,
-                normal: abs_c,
-                to_wall: ax,
-                other_to_wall: ay,
-                other_normal: abs_s,
-                lateral,
-            }
+        // Each axis: the wall the axis heads for, or the one behind when the
+        // axis runs within half the cone of parallel and that one is nearer.
+        let (north, south) = (arena.length_x.saturating_sub(lx), lx);
+        let (east, west) = (arena.width_y.saturating_sub(ly), ly);
+        let cone = Cone::new(abs_c, abs_s);
+        let (x_wall, ax, (nx, tx)) = if cos >= 0 {
+            let (far, a, c) = nearer_of(&cone, true, abs_c, north, south);
+            (if far { Wall::South } else { Wall::North }, a, c)
         } else {
-            Beam {
-                wall: y_wall,
-                direction,
-                sin,
-                cos,
-                normal: abs_s,
-                to_wall: ay,
-                other_to_wall: ax,
-                other_normal: abs_c,
-                lateral,
-            }
+            let (far, a, c) = nearer_of(&cone, true, abs_c, south, north);
+            (if far { Wall::North } else { Wall::South }, a, c)
+        };
+        let (y_wall, ay, (ny, ty)) = if sin >= 0 {
+            let (far, a, c) = nearer_of(&cone, false, abs_s, east, west);
+            (if far { Wall::West } else { Wall::East }, a, c)
+        } else {
+            let (far, a, c) = nearer_of(&cone, false, abs_s, west, east);
+            (if far { Wall::East } else { Wall::West }, a, c)
+        };
+        // The x-wall is nearer in the cone when A_x / n_x <= A_y / n_y, i.e.
+        // A_x n_y <= A_y n_x (a negative A, a lidar outside the box, counts
+        // as 0; a wall out of the cone, n <= 0, is never nearer).
+        let x_first = ny <= 0 || (nx > 0 && mul_hi(ax.0.max(0), ny.max(0)) <= mul_hi(ay.0.max(0), nx.max(0)));
+        let (wall, normal, cone_normal, cone_tangent, to_wall, other_to_wall, other_normal) =
+            if x_first { (x_wall, abs_c, nx, tx, ax, ay, ny) } else { (y_wall, abs_s, ny, ty, ay, ax, nx) };
+        // d(to_wall)/d(theta) with the sign the module docs give the lever:
+        // x-walls f sin th + r cos th = dy, y-walls -(f cos th - r sin th) = -dx
+        let mount_lever = if wall.is_x_wall() { dy } else { dx.saturating_neg() };
+        Beam {
+            wall,
+            direction,
+            sin,
+            cos,
+            normal,
+            cone_normal: cone_normal.max(1),
+            cone_tangent,
+            to_wall,
+            other_to_wall,
+            other_normal: other_normal.max(1),
+            setback,
+            mount_lever: Length(mount_lever),
         }
     }
 
     /// How far past the wall, along its normal, a measured distance `z`
-    /// (the lidar model's output) lands: `z |cos incidence| - to_wall`.
-    /// Zero for a perfect reading; positive when the reading is longer than
-    /// expected. `|cos incidence|` times the ordinary innovation
-    /// `z - expected`, with no division.
+    /// (the lidar model's output) lands: `(z + setback) cos - to_wall`, with
+    /// `cos` the cone's incidence ([`Beam::cone_normal`]). Zero for a
+    /// perfect reading; positive when the reading is longer than expected.
+    /// The cone's cosine times the ordinary innovation `z - expected`, with
+    /// no division.
     pub fn normal_miss(&self, z: Length) -> Length {
-        Length(mul_q30(z.0, self.normal)).saturating_sub(self.to_wall)
+        // 0 < cone_normal <= 2^30: the product is below |z + setback|
+        Length(mul_q30_unsat(z.saturating_add(self.setback).0, self.cone_normal)).saturating_sub(self.to_wall)
     }
 
-    /// True when the beam meets the wall at less than `max_incidence`
-    /// from square on, given as its cosine in Q2.30.
+    /// `-d(normal_miss)/d(theta)` for a reading `z`, signed for the north and
+    /// east walls (the south and west walls' is its negation), mm per rad
+    /// (Q16): `(z + setback)` times the cone's sine with the sign of the
+    /// incidence's change (0 inside the cone), plus the lidar position's
+    /// share (see the module docs).
+    pub fn heading_lever(&self, z: Length) -> Length {
+        let range = z.saturating_add(self.setback).0;
+        let turn = if self.cone_tangent == 0 {
+            0
+        } else {
+            // x-walls: sign(sin phi); y-walls: -sign(cos phi)
+            // 0 <= cone_tangent <= 2^30: the product is below |range|
+            let t = mul_q30_unsat(range, self.cone_tangent);
+            let up = if self.wall.is_x_wall() { self.sin >= 0 } else { self.cos < 0 };
+            if up {
+                t
+            } else {
+                t.wrapping_neg()
+            }
+        };
+        Length(turn).saturating_add(self.mount_lever)
+    }
+
+    /// True when the beam's axis meets the wall at less than
+    /// `max_incidence` from square on, given as its cosine in Q2.30.
     pub fn square_enough(&self, min_normal: i32) -> bool {
         self.normal >= min_normal
     }
 
-    /// True when the ray passes within `margin` of a corner: its lengths to
-    /// the two walls differ by less than `margin`. Division-free:
-    /// `|A_x |s| - A_y |c|| < margin |c| |s|`.
+    /// True when the nearest points in the cone on the two candidate walls
+    /// are less than `margin` apart in range. Division-free:
+    /// `|A_x n_y - A_y n_x| < margin n_x n_y` with the cone cosines `n`.
     pub fn near_corner(&self, margin: Length) -> bool {
         // In Q14 mm by mul_hi (Q16 * Q30 / 2^32), each within 3 LSB
-        // (2^-12 mm) below the exact product: A >= 0 and |c|, |s| <= 2^30
+        // (2^-12 mm) below the exact product: A >= 0 and 0 < n <= 2^30
         // keep every product in [0, 2^29), their difference in i32.
         let a = mul_hi(self.to_wall.0.max(0), self.other_normal);
-        let b = mul_hi(self.other_to_wall.0.max(0), self.normal);
-        // |c s| in Q28 (<= 2^28), << 2 -> Q30; margin (Q16) times it -> Q14.
-        let cs = mul_hi(self.normal, self.other_normal) << 2;
+        let b = mul_hi(self.other_to_wall.0.max(0), self.cone_normal);
+        // n n in Q28 (<= 2^28), << 2 -> Q30; margin (Q16) times it -> Q14.
+        let cs = mul_hi(self.cone_normal, self.other_normal) << 2;
         (a - b).abs() < mul_hi(margin.0.max(0), cs)
     }
 
     /// The expected lidar model output (distance from the reference point
-    /// along the beam): `to_wall / |cos incidence|`. `None` when the beam is
-    /// closer than 1/1024 to parallel to the wall (the division would blow
-    /// up; the beam then meets the other wall first anyway unless the box is
-    /// degenerate). One 64-bit division: not for the robot's per-tick path.
+    /// along the beam): `to_wall / cone_normal - setback`. `None` when the
+    /// cone's cosine is below 1/1024 (the division would blow up). One
+    /// 64-bit division: not for the robot's per-tick path.
     pub fn expected_distance(&self) -> Option<Length> {
-        if self.normal < (1 << 20) {
+        if self.cone_normal < (1 << 20) {
             return None;
         }
         let num = i64::from(self.to_wall.0) << 30;
-        let d = crate::math::div_i64(num, i64::from(self.normal)).unwrap_or(0);
-        i32::try_from(d).ok().map(Length)
-    }
-
-    /// Where the ray ends on the wall, as a point (x, y) in mm (Length).
-    /// For tests and the replay tool (one guarded division).
-    pub fn hit_point(&self, pose: &Pose) -> Option<(Length, Length)> {
-        let t = self.expected_distance()?;
-        let (px, py) = (pose.x.to_length(), pose.y.to_length());
-        let ox = px.saturating_sub(Length(mul_q30(self.lateral.0, self.sin)));
-        let oy = py.saturating_add(Length(mul_q30(self.lateral.0, self.cos)));
-        Some((ox.saturating_add(Length(mul_q30(t.0, self.cos))), oy.saturating_add(Length(mul_q30(t.0, self.sin)))))
+        let d = crate::math::div_i64(num, i64::from(self.cone_normal)).unwrap_or(0);
+        i32::try_from(d).ok().map(|d| Length(d).saturating_sub(self.setback))
     }
 }
 

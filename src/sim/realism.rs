@@ -23,7 +23,7 @@ use super::noise::Rng;
 use crate::config::sim as cfg;
 
 /// The effects' settings (see the module docs); [`Realism::IDEAL`] turns
-/// them all off (the thin-ray, rigid, undisturbed robot).
+/// them all off but the cone (the rigid, undisturbed robot).
 #[derive(Clone, Copy, PartialEq, Debug)]
 pub struct Realism {
     /// Keep the lidars and the skid inside the box too (not only the
@@ -50,13 +50,15 @@ pub struct Realism {
 }
 
 impl Realism {
-    /// Everything off.
+    /// Everything off but the lidar's cone, which is the sensor's geometry
+    /// (the firmware's measurement model has it too); `cone_deg: 0.0` for
+    /// thin rays.
     pub const IDEAL: Realism = Realism {
         whole_body: false,
         speed_spread: [0.0; 4],
         pivot_behind_mm: 0.0,
         pivot_spread_mm: 0.0,
-        cone_deg: 0.0,
+        cone_deg: cfg::LIDAR_CONE_DEG,
         glancing_deg: 90.0,
         spurious_share: 0.0,
         compass_disturbance_deg: 0.0,
