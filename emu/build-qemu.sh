@@ -96,13 +96,19 @@ add_line_once() { # file line
 install_board_sources() {
     add_line_once "$qemu_src/hw/xtensa/meson.build" \
         "xtensa_ss.add(when: 'CONFIG_XTENSA_ESP8266', if_true: files('esp8266.c'))"
+    # the simulator link: self-contained, so another checkout's board that
+    # does not use it still links
+    add_line_once "$qemu_src/hw/xtensa/meson.build" \
+        "xtensa_ss.add(when: 'CONFIG_XTENSA_ESP8266', if_true: files('esp8266_link.c'))"
     if ! grep -q '^config XTENSA_ESP8266$' "$qemu_src/hw/xtensa/Kconfig"; then
         printf '\nconfig XTENSA_ESP8266\n    bool\n' >>"$qemu_src/hw/xtensa/Kconfig"
     fi
     add_line_once "$qemu_src/configs/devices/xtensa-softmmu/default.mak" "CONFIG_XTENSA_ESP8266=y"
     # copy only when changed, so ninja rebuilds only what changed
-    cmp -s "$emu_dir/esp8266.c" "$qemu_src/hw/xtensa/esp8266.c" ||
-        cp "$emu_dir/esp8266.c" "$qemu_src/hw/xtensa/esp8266.c"
+    local f
+    for f in esp8266.c esp8266_link.c esp8266_link.h; do
+        cmp -s "$emu_dir/$f" "$qemu_src/hw/xtensa/$f" || cp "$emu_dir/$f" "$qemu_src/hw/xtensa/$f"
+    done
 }
 
 build_qemu() {

@@ -39,6 +39,13 @@
  *                     UART0 TX has sent the text uart-input-after (or at
  *                     once when that is empty)
  *   stop-ms=N         quit (exit status 0) after N virtual milliseconds
+ *   sim=PATH          the simulator's Unix socket (esp8266_link.h): the
+ *                     I2C slaves on GPIO14/12, XSHUT on GPIO0/2, the servo
+ *                     pins GPIO5/4 and UART0 wired to the simulated robot
+ *   profile=FILE      at stop-ms, the CPU's PC sampled every profile-ns
+ *                     virtual ns (with sim=, from when the simulator says
+ *                     the firmware's loop runs): "<pc> <a0> <samples>"
+ *                     lines (hex, hex, decimal)
  *
  * SPDX-License-Identifier: GPL-2.0-or-later
  */
@@ -63,6 +70,7 @@
 #include "exec/address-spaces.h"
 #include "chardev/char-fe.h"
 #include "qom/object.h"
+#include "esp8266_link.h"
 
 #define TYPE_ESP8266_MACHINE MACHINE_TYPE_NAME("esp8266")
 OBJECT_DECLARE_SIMPLE_TYPE(Esp8266State, ESP8266_MACHINE)
@@ -152,6 +160,24 @@ struct Esp8266State {
     uint32_t gpio_out, gpio_enable, gpio_pin[NUM_GPIO];
     uint32_t gpio_levels;       /* GPIO0..15, bit 16 = GPIO16 */
     uint32_t rtc_gpio_out, rtc_gpio_enable;
+
+    /* the simulator (sim=PATH): see "the wire to the simulator" below */
+    char *sim_path;
+    Esp8266Link *link;
+    uint32_t driven;            /* levels the chip drives, before the slaves */
+    uint32_t ext_low;           /* pins a slave pulls low */
+    bool link_dirty;            /* an edge the slaves may answer since the last sync */
+    int64_t link_valid_until;
+    QEMUTimer *link_wake_timer, *link_rx_timer;
+    Fifo link_rx;               /* bytes for UART0 RX, one per frame time */
+
+    /* PC sampling (profile=FILE) */
+    char *profile_path;
+    uint32_t profile_ns;
+    uint64_t profile_samples;
+    int64_t profile_start_ns;   /* with sim=: from the loop's start */
+    GHashTable *profile;
+    QEMUTimer *profile_timer;
 
     /* FRC1 */
     uint32_t frc1_load, frc1_ctrl, frc1_count_at_start;
@@ -377,6 +403,9 @@ static void uart_tx_done(void *opaque)
 
     if (!s->stopped) {
         qemu_chr_fe_write_all(&s->chr, &b, 1);
+        if (s->link) {
+            esp8266_link_event(s->link, now_ns(), LINK_UART_TX, b);
+        }
     }
     input_watch_tx(s, b);
     if (s->tx.count) {
@@ -517,7 +546,7 @@ enum {
  * input floats high (the board's and the pads' pull-ups). GPIO16 (bit 16)
  * is push-pull when enabled.
  */
-static uint32_t gpio_compute_levels(Esp8266State *s)
+static uint32_t gpio_driven_levels(Esp8266State *s)
 {
     uint32_t levels = 0;
 
@@ -538,11 +567,24 @@ static uint32_t gpio_compute_levels(Esp8266State *s)
     return levels;
 }
 
+/* With a simulator, its slaves can pull the I2C lines low too. */
+static uint32_t gpio_compute_levels(Esp8266State *s)
+{
+    return gpio_driven_levels(s) & ~s->ext_low;
+}
+
+static void link_note_pins(Esp8266State *s, uint32_t driven);
+
 /* Recompute the pin levels and log each change as an edge. */
 static void gpio_update(Esp8266State *s)
 {
-    uint32_t levels = gpio_compute_levels(s);
-    uint32_t changed = levels ^ s->gpio_levels;
+    uint32_t levels, changed;
+
+    if (s->link) {
+        link_note_pins(s, gpio_driven_levels(s));
+    }
+    levels = gpio_compute_levels(s);
+    changed = levels ^ s->gpio_levels;
 
     s->gpio_levels = levels;
     for (int pin = 0; changed && pin <= NUM_GPIO; pin++) {
@@ -551,6 +593,8 @@ static void gpio_update(Esp8266State *s)
         }
     }
 }
+
+static void link_refresh(Esp8266State *s);
 
 static uint64_t gpio_read(void *opaque, hwaddr addr, unsigned size)
 {
@@ -562,6 +606,7 @@ static uint64_t gpio_read(void *opaque, hwaddr addr, unsigned size)
     case GPIO_ENABLE:
         return s->gpio_enable;
     case GPIO_IN:   /* bits 16..31: strapping, read as 0 */
+        link_refresh(s);
         return s->gpio_levels & GPIO_MASK;
     case GPIO_OUT_W1TS:
     case GPIO_OUT_W1TC:
@@ -674,6 +719,149 @@ static void gpio_reset(Esp8266State *s)
     memset(s->gpio_pin, 0, sizeof(s->gpio_pin));
     s->rtc_gpio_out = s->rtc_gpio_enable = 0;
     gpio_update(s);
+}
+
+/* ---- the wire to the simulator (sim=PATH, esp8266_link.h) ------------------------ */
+
+#define SDA_GPIO        14
+#define SCL_GPIO        12
+/* The pins the simulated robot sees: XSHUT front/right, servos right/left,
+ * SCL, SDA (config::pins). */
+#define LINK_PINS_MASK  ((1u << 0) | (1u << 2) | (1u << 4) | (1u << 5) | \
+                         (1u << SCL_GPIO) | (1u << SDA_GPIO))
+
+/*
+ * A slave's SDA changes only at SCL's falling edge, at a START or a STOP
+ * (SDA moving while SCL is high), or when the simulator said so
+ * (valid_until: an injected fault's window); no slave stretches SCL. So
+ * GPIO_IN asks the simulator only after such an edge: a bit costs one
+ * round trip, and the levels in between are known here.
+ */
+static void link_note_pins(Esp8266State *s, uint32_t driven)
+{
+    uint32_t changed = (driven ^ s->driven) & LINK_PINS_MASK;
+    bool scl_was_high = (s->driven >> SCL_GPIO) & 1;
+    bool scl_high = (driven >> SCL_GPIO) & 1;
+
+    s->driven = driven;
+    if (!changed || s->stopped) {
+        return;
+    }
+    esp8266_link_event(s->link, now_ns(), LINK_PINS, driven & LINK_PINS_MASK);
+    if ((scl_was_high && !scl_high) ||
+        (scl_high && ((changed >> SDA_GPIO) & 1))) {
+        s->link_dirty = true;
+    }
+}
+
+static void link_rx_tick(void *opaque)
+{
+    Esp8266State *s = opaque;
+
+    uart_receive_byte(s, fifo_pop(&s->link_rx));
+    if (s->link_rx.count) {
+        timer_mod(s->link_rx_timer, now_ns() + uart_frame_ns(s));
+    }
+}
+
+static void stop_expired(void *opaque);
+
+static void link_sync(Esp8266State *s)
+{
+    LinkAnswer a;
+
+    if (s->stopped) {
+        return;
+    }
+    esp8266_link_sync(s->link, now_ns(), &a);
+    if (a.flags & LINK_STOP) {
+        stop_expired(s);
+        return;
+    }
+    if ((a.flags & LINK_LOOP) && s->profile && !s->profile_start_ns) {
+        s->profile_start_ns = now_ns();
+        timer_mod(s->profile_timer, now_ns() + s->profile_ns);
+    }
+    s->ext_low = a.flags & LINK_SDA_LOW ? 1u << SDA_GPIO : 0;
+    s->link_valid_until = a.valid_until_ns;
+    s->link_dirty = false;
+    if (a.wake_at_ns < INT64_MAX) {
+        timer_mod(s->link_wake_timer, MAX(a.wake_at_ns, now_ns() + 1));
+    }
+    for (uint32_t i = 0; i < a.rx_len; i++) {
+        if (!fifo_push(&s->link_rx, a.rx[i])) {
+            qemu_log_mask(LOG_GUEST_ERROR, "esp8266: simulator RX bytes lost\n");
+        }
+    }
+    if (s->link_rx.count && !timer_pending(s->link_rx_timer)) {
+        timer_mod(s->link_rx_timer, now_ns() + uart_frame_ns(s));
+    }
+    gpio_update(s);
+}
+
+static void link_refresh(Esp8266State *s)
+{
+    if (s->link && (s->link_dirty || now_ns() >= s->link_valid_until)) {
+        link_sync(s);
+    }
+}
+
+static void link_wake(void *opaque)
+{
+    link_sync(opaque);
+}
+
+static void link_start(Esp8266State *s)
+{
+    s->link = esp8266_link_connect(s->sim_path);
+    s->link_wake_timer = timer_new_ns(QEMU_CLOCK_VIRTUAL, link_wake, s);
+    s->link_rx_timer = timer_new_ns(QEMU_CLOCK_VIRTUAL, link_rx_tick, s);
+    s->driven = gpio_driven_levels(s);
+    esp8266_link_event(s->link, 0, LINK_PINS, s->driven & LINK_PINS_MASK);
+    link_sync(s);
+}
+
+/* ---- PC sampling (profile=FILE) --------------------------------------------- */
+
+/* The vCPU stops at an instruction boundary for a virtual timer under
+ * -icount, so env.pc is the next instruction to run. */
+static void profile_tick(void *opaque)
+{
+    Esp8266State *s = opaque;
+    /* the PC and a0 (call0 ABI: in a leaf function, its return address) */
+    uint64_t key = (uint64_t)s->cpu->env.pc << 32 | s->cpu->env.regs[0];
+    uint64_t *n = g_hash_table_lookup(s->profile, &key);
+
+    if (!n) {
+        n = g_new0(uint64_t, 2);
+        n[0] = key;
+        g_hash_table_insert(s->profile, n, n);
+    }
+    n[1]++;
+    s->profile_samples++;
+    timer_mod(s->profile_timer, now_ns() + s->profile_ns);
+}
+
+static void profile_write(Esp8266State *s)
+{
+    GHashTableIter it;
+    gpointer k, v;
+    FILE *f = fopen(s->profile_path, "w");
+
+    if (!f) {
+        error_report("esp8266: profile=%s: %s", s->profile_path, strerror(errno));
+        return;
+    }
+    fprintf(f, "# samples %" PRIu64 " every %u ns from %" PRId64 " to %"
+            PRId64 " ns\n", s->profile_samples, s->profile_ns,
+            s->profile_start_ns, now_ns());
+    g_hash_table_iter_init(&it, s->profile);
+    while (g_hash_table_iter_next(&it, &k, &v)) {
+        const uint64_t *n = v;
+        fprintf(f, "%08x %08x %" PRIu64 "\n", (uint32_t)(n[0] >> 32),
+                (uint32_t)n[0], n[1]);
+    }
+    fclose(f);
 }
 
 /* ---- FRC1 (TRM, timer registers) --------------------------------------------- */
@@ -1062,6 +1250,12 @@ static void stop_expired(void *opaque)
     Esp8266State *s = opaque;
 
     log_event(s, "stop");
+    if (s->profile) {
+        profile_write(s);
+    }
+    if (s->link) {
+        esp8266_link_end(s->link, now_ns());
+    }
     s->stopped = true;
     qemu_system_shutdown_request(SHUTDOWN_CAUSE_HOST_QMP_QUIT);
 }
@@ -1142,6 +1336,18 @@ static void esp8266_init(MachineState *machine)
         s->events = open_events(s->events_path);
     }
     s->gpio_levels = gpio_compute_levels(s);
+    if (s->profile_path) {
+        s->profile = g_hash_table_new_full(g_int64_hash, g_int64_equal,
+                                           NULL, g_free);
+        s->profile_timer = timer_new_ns(QEMU_CLOCK_VIRTUAL, profile_tick, s);
+        s->profile_ns = MAX(s->profile_ns, 1u);
+        if (!s->sim_path) {
+            timer_mod(s->profile_timer, s->profile_ns);
+        }
+    }
+    if (s->sim_path) {
+        link_start(s);
+    }
     load_uart_input(s);
     if (s->stop_ms) {
         s->stop_timer = timer_new_ns(QEMU_CLOCK_VIRTUAL, stop_expired, s);
@@ -1169,6 +1375,8 @@ STRING_OPTION(flash_path)
 STRING_OPTION(events_path)
 STRING_OPTION(input_path)
 STRING_OPTION(input_after)
+STRING_OPTION(sim_path)
+STRING_OPTION(profile_path)
 
 /* uint32 options: `opaque` is the field's offset in Esp8266State. */
 static void visit_u32_option(Object *obj, Visitor *v, const char *name,
@@ -1189,6 +1397,8 @@ static void add_u32_option(ObjectClass *oc, const char *name, size_t offset,
 static void esp8266_instance_init(Object *obj)
 {
     ESP8266_MACHINE(obj)->input_gap_ms = 100;
+    ESP8266_MACHINE(obj)->profile_ns = 10007;
+    ESP8266_MACHINE(obj)->link_valid_until = INT64_MAX;
 }
 
 static void add_string_option(ObjectClass *oc, const char *name,
@@ -1224,6 +1434,12 @@ static void esp8266_class_init(ObjectClass *oc, void *data)
                       "start uart-input once UART0 has sent this text");
     add_u32_option(oc, "input-gap-ms", offsetof(Esp8266State, input_gap_ms),
         "virtual ms before the first uart-input line and between lines");
+    add_string_option(oc, "sim", get_sim_path, set_sim_path,
+                      "the simulator's Unix socket (cargo fw-emu --sim)");
+    add_string_option(oc, "profile", get_profile_path, set_profile_path,
+                      "PC samples written here at stop-ms");
+    add_u32_option(oc, "profile-ns", offsetof(Esp8266State, profile_ns),
+        "virtual ns between PC samples (default 10007)");
     add_u32_option(oc, "stop-ms", offsetof(Esp8266State, stop_ms),
         "quit after this many virtual ms (0: run until stopped)");
 }

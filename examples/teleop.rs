@@ -13,6 +13,10 @@
 //!   --lines FILE     line mode: send FILE's commands ('-' = stdin), print what comes back
 //!   --linger S       line mode: listen S seconds after the last command (default 1)
 //!   --no-keepalive   line mode: do not repeat untimed motions (the deadman cuts them)
+//!   --mission FILE   upload FILE's mission steps (one per line, as after 'mission add')
+//!   --start          start the robot's mission (after --mission), then unplug the cable
+//!   --log-hz HZ      with --start: the on-board log's rows per second (default: the robot's)
+//!   --dump FILE      download the on-board log as telemetry CSV (with --record also as a replay log)
 //! ```
 //! Keys: arrows / WASD drive, space stops, + / - speed level, q quits.
 
@@ -23,8 +27,8 @@ use std::time::{Duration, Instant};
 
 use paperbot::config;
 use paperbot::host::teleop::{
-    action, keys, link, parse_plan, run_line_mode, Action, Dashboard, Driver, Key, LineModeOptions, LineReader, Panel,
-    Recorder,
+    action, keys, link, mission, parse_plan, run_line_mode, Action, Dashboard, Driver, Key, LineModeOptions,
+    LineReader, Panel, Recorder,
 };
 use ratatui::crossterm::event::{self, Event, KeyCode, KeyEventKind, KeyModifiers};
 use ratatui::layout::{Constraint, Layout};
@@ -45,6 +49,10 @@ struct Args {
     lines: Option<String>,
     linger_s: f64,
     keepalive: bool,
+    mission: Option<String>,
+    start: bool,
+    log_hz: Option<u16>,
+    dump: Option<String>,
 }
 
 fn parse_args() -> Result<Args, String> {
@@ -66,6 +74,10 @@ fn parse_args() -> Result<Args, String> {
                 }
             }
             "--no-keepalive" => a.keepalive = false,
+            "--mission" => a.mission = Some(value("--mission")?),
+            "--start" => a.start = true,
+            "--log-hz" => a.log_hz = Some(value("--log-hz")?.parse().map_err(|_| "--log-hz wants 0..100")?),
+            "--dump" => a.dump = Some(value("--dump")?),
             f if f.starts_with('-') && f != "-" => return Err(format!("unknown option {f}")),
             p if a.port.is_none() => a.port = Some(p.to_string()),
             p => return Err(format!("one port only ({p}?)")),
@@ -78,7 +90,7 @@ fn usage() -> String {
     include_str!("teleop.rs")
         .lines()
         .skip(4)
-        .take(14)
+        .take(18)
         .map(|l| l.strip_prefix("//! ").unwrap_or(l.trim_start_matches("//!")))
         .filter(|l| !l.starts_with("```"))
         .collect::<Vec<_>>()
@@ -310,7 +322,15 @@ fn run() -> Result<(), String> {
             Some(parse_plan(&text).map_err(|e| format!("{path}: {e}"))?)
         }
     };
-    if plan.is_none() && !(io::stdout().is_terminal() && io::stdin().is_terminal()) {
+    let missions = args.mission.is_some() || args.start || args.dump.is_some();
+    let steps = match &args.mission {
+        None => None,
+        Some(path) => {
+            let text = std::fs::read_to_string(path).map_err(|e| format!("{path}: {e}"))?;
+            Some(mission::parse_mission_file(&text).map_err(|e| format!("{path}: {e}"))?)
+        }
+    };
+    if plan.is_none() && !missions && !(io::stdout().is_terminal() && io::stdin().is_terminal()) {
         return Err("not a terminal: use --lines FILE (or '-' for stdin) for the line mode".into());
     }
     let port_name = pick_port(&args)?;
@@ -332,6 +352,9 @@ fn run() -> Result<(), String> {
         config::timing::TELEMETRY_HZ as u16
     });
 
+    if missions {
+        return run_missions(&args, steps, &mut *port, &port_name, recorder.as_mut());
+    }
     match plan {
         Some(plan) => {
             let opts = LineModeOptions {
@@ -359,6 +382,38 @@ fn run() -> Result<(), String> {
         if let Some(start) = rec.replay_start() {
             eprintln!("teleop: replay it with `cargo run --example replay -- {path} --start {start}`");
         }
+    }
+    Ok(())
+}
+
+/// `--mission`, `--start`, `--dump`: upload, start, download, in that
+/// order (each optional), printing what the robot answers.
+fn run_missions(
+    args: &Args,
+    steps: Option<Vec<String>>,
+    port: &mut dyn SerialPort,
+    port_name: &str,
+    recorder: Option<&mut Recorder<BufWriter<File>>>,
+) -> Result<(), String> {
+    let io_err = |e: io::Error| format!("{port_name}: {e}");
+    let mut out = io::stdout().lock();
+    if let Some(steps) = steps {
+        mission::upload(port, &steps, &mut out).map_err(io_err)??;
+        eprintln!(
+            "teleop: mission of {} steps uploaded (kept on the robot across a reset, not a power-off)",
+            steps.len()
+        );
+    }
+    if args.start {
+        mission::start(port, args.log_hz, &mut out).map_err(io_err)??;
+        eprintln!("teleop: mission started: unplug the cable now (any byte after the countdown aborts it);");
+        eprintln!("teleop: afterwards plug it in again and download the log with --dump FILE");
+        return Ok(());
+    }
+    if let Some(path) = &args.dump {
+        let mut csv = create(path)?;
+        let got = mission::download(port, &mut csv, recorder).map_err(io_err)??;
+        eprintln!("teleop: {}; {} rows written to {path}", got.summary.trim_start_matches("# "), got.rows);
     }
     Ok(())
 }

@@ -579,3 +579,82 @@ pub mod teleop {
     /// run then goes on without it.
     pub const ANSWER_WAIT_MS: u32 = 1_000;
 }
+
+/// Going places on the estimate (`goto`, `face`) and the wall stop
+/// (`control::goto`, `control::tick`).
+pub mod goto {
+    /// The wall stop: a forward motion stops when the front lidar reads a
+    /// target closer than this to the reference point (the car's nose), mm.
+    /// The reading is up to one timing budget (33 ms, 5 mm at 0.15 m/s)
+    /// old and the servos take a tick or two to stop (another 3 mm), so a
+    /// wall square ahead is met at about 40 mm; a wall met at a slant is
+    /// nearer to the nose's corners than to the beam (at 45 degrees the
+    /// corner of the 85 mm-wide body is about 30 mm nearer).
+    pub const WALL_STOP_MM: i32 = 50;
+    /// `goto` arrives when the estimated reference point is this close to
+    /// the target, mm: half the promised 20 mm, leaving the other half to
+    /// the estimate's own error.
+    pub const ARRIVE_MM: i32 = 8;
+    /// `goto` and `face` turn in place until the heading is this close to
+    /// the one wanted, millidegrees: a turn at `TURN_MRAD_S` moves 1.4
+    /// degrees per loop tick, so stopping within 1 degree leaves the
+    /// promised 3 degrees for the estimate's error.
+    pub const TURN_TOLERANCE_MDEG: i32 = 1_000;
+    /// While driving straight, a heading error past this (millidegrees)
+    /// stops the leg and turns again (re-planning from the estimate).
+    pub const STEER_TOLERANCE_MDEG: i32 = 4_000;
+    /// Speed of `goto`'s straight legs, mm/s: inside what the servos drive
+    /// both ways at no trim (fwd 124..150, back 108..154, `config::serial`).
+    pub const SPEED_MM_S: i32 = 130;
+    /// Turn rate of `goto`'s and `face`'s turns, mrad/s: the slow end of
+    /// what the servos drive both ways (cw 2377..3300, ccw 2353..3169).
+    pub const TURN_MRAD_S: i32 = 2_400;
+    /// A target must be at least this far inside every wall, mm: the wall
+    /// stop's distance plus the arrival tolerance, so a `goto` that ends
+    /// facing the wall is not stopped short by the wall stop (and the
+    /// wheels, 42.5 mm to each side, stay clear of a wall it drives along).
+    pub const TARGET_WALL_MARGIN_MM: i32 = WALL_STOP_MM + 20;
+    /// `goto` and `face` refuse to start (and stop) when the estimate's
+    /// one-sigma position uncertainty is above this, mm: the promise is
+    /// 20 mm. After `pose` it is 100 mm (`config::estimator`): a second of
+    /// lidar readings standing still brings it under.
+    pub const MAX_SIGMA_MM: i32 = 15;
+    /// The same for the heading, millidegrees.
+    pub const MAX_SIGMA_MDEG: i32 = 3_000;
+    /// A `goto` stops when the front lidar sees something this much nearer
+    /// than the target along the way (an obstacle), mm.
+    pub const OBSTACLE_MARGIN_MM: i32 = 30;
+    /// Longest a `goto` or `face` may take, ms: the box's diagonal (0.9 m)
+    /// at 0.13 m/s is 7 s, plus turns.
+    pub const TIME_LIMIT_MS: u32 = 20_000;
+}
+
+/// Missions: commands stored on the robot and run without the cable
+/// (`control::mission`).
+pub mod mission {
+    /// Steps a mission holds at most. Each takes 12 bytes in the RAM copy
+    /// and in RTC memory (`board::esp8266::RtcMissionStore`, 512 bytes).
+    pub const MAX_STEPS: usize = 24;
+    /// Countdown after `mission start` before the first step, ms: time to
+    /// pull the cable and put the robot down.
+    pub const COUNTDOWN_MS: u32 = 10_000;
+    /// A running mission stops after this long whatever its steps, ms (its
+    /// own deadman: nobody is at the cable to stop it).
+    pub const TIME_LIMIT_MS: u32 = 300_000;
+}
+
+/// The on-board log (`control::log`): telemetry rows kept in RAM during a
+/// mission, dumped with `dump`.
+pub mod log {
+    /// Rows kept (a ring: when it is full the oldest row goes and is
+    /// counted as dropped). 60 bytes each, in the firmware's DRAM budget
+    /// (24 KiB, of which the rest of the firmware takes 8 KB): 200 rows
+    /// are 12 KB, 50 s at 4 Hz.
+    pub const ROWS: usize = 200;
+    /// Rows per second at boot (`log <Hz>` changes it, 0 = off): a row
+    /// every 250 ms is every 40 mm at 0.15 m/s.
+    pub const HZ: u16 = 4;
+    /// Rows written per loop tick while dumping: one row (about 110 bytes)
+    /// every 10 ms is 11 kB/s, what the UART carries (115200 baud).
+    pub const DUMP_ROWS_PER_TICK: u8 = 1;
+}

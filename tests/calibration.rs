@@ -4,6 +4,8 @@
 //! short of sectors keeps collecting up to its cap; incomplete sweeps are
 //! rejected; the config line round-trips.
 
+mod common;
+
 use paperbot::config;
 use paperbot::model::compass::{CalStatus, CalibrationError, ConfigLine, MagCalibrator};
 use paperbot::model::compass::{MagCalibration, MagCounts};
@@ -182,13 +184,8 @@ fn the_config_line_reproduces_the_report_constant_and_round_trips() {
         MagCalibration { bias: [-5, 0, 123], scale_q16: [1, 65536, 9_999_999] },
     ] {
         let line = ConfigLine(&cal).to_string();
-        let nums: Vec<f64> = line
-            .split(|c: char| !(c.is_ascii_digit() || c == '.' || c == '-'))
-            .filter(|s| s.contains('.'))
-            .map(|s| s.parse().unwrap())
-            .collect();
-        assert_eq!(nums.len(), 6, "{line}");
-        let back = MagCalibration::from_f64([nums[0], nums[1], nums[2]], [nums[3], nums[4], nums[5]]);
+        let (bias, scale) = common::parse_calibration_line(&line);
+        let back = MagCalibration::from_f64(bias, scale);
         assert_eq!(back, cal, "{line}");
     }
 }

@@ -2,6 +2,8 @@
 //! the simulated robot through the register-level fake chips: exact runs
 //! against an f64 reference, sensor truth, faults, determinism.
 
+mod common;
+
 use paperbot::config;
 use paperbot::config::geometry::ROTATION_TO_REFERENCE;
 use paperbot::math::{Speed, TurnRate};
@@ -314,18 +316,6 @@ fn calibrate(seed: u64, noise: Noise, command: &str) -> Vec<String> {
     lines
 }
 
-/// The numbers of a pasted `CALIBRATION` line.
-fn parse_config_line(line: &str) -> ([f64; 3], [f64; 3]) {
-    let inner = line.split("from_f64(").nth(1).unwrap();
-    let nums: Vec<f64> = inner
-        .split(|c: char| !(c.is_ascii_digit() || c == '.' || c == '-'))
-        .filter(|s| s.contains('.'))
-        .map(|s| s.parse().unwrap())
-        .collect();
-    assert_eq!(nums.len(), 6, "{line}");
-    ([nums[0], nums[1], nums[2]], [nums[3], nums[4], nums[5]])
-}
-
 /// On the simulated floor a turn sweeps the field through x and y only
 /// (z is the vertical field, whatever the heading), as on a real floor. A
 /// `cal` recovers the simulated distortion (the config's calibration,
@@ -348,7 +338,7 @@ fn cal_in_the_simulator_recovers_the_simulated_distortion() {
         let line = lines[ok + 1].strip_prefix("# ").unwrap();
         assert!(line.starts_with("pub const CALIBRATION: MagCalibration = MagCalibration::from_f64(["), "{line}");
         assert!(line.ends_with("]);"), "{line}");
-        let (bias, scale) = parse_config_line(line);
+        let (bias, scale) = common::parse_calibration_line(line);
         for i in 0..3 {
             let want_scale = f64::from(cfg.scale_q16[i]) / 65536.0;
             assert!((bias[i] - f64::from(cfg.bias[i])).abs() <= 3.0, "{command} seed {seed}: bias {i}: {line}");

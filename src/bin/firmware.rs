@@ -42,8 +42,12 @@ mod robot {
     use esp8266_hal::entry;
     use esp8266_hal::uart::UART0Serial;
 
-    use paperbot::board::esp8266::{halt, start_watchdog, Board, I2cBus, MicrosClock};
+    use paperbot::board::bitbang_i2c::CycleClock as _;
+    use paperbot::board::esp8266::{halt, start_watchdog, Board, Ccount, I2cBus, MicrosClock};
+    use paperbot::board::rtc_store::RtcMissionStore;
     use paperbot::config;
+    use paperbot::control::log::RingLog;
+    use paperbot::control::mission::{Mission, MissionStore as _};
     use paperbot::control::tick::{Controller, LineSink, TICK_US};
     use paperbot::driver::bus::SharedI2c;
     use paperbot::driver::compass::Compass;
@@ -51,7 +55,16 @@ mod robot {
     use paperbot::driver::servo::ServoPair;
     use paperbot::driver::HeadingSensor as _;
     use paperbot::math::Angle;
+    use paperbot::model::measurement::Arena;
     use paperbot::model::Pose;
+
+    const CYCLES_PER_MS: u32 = config::board::CPU_HZ / 1_000;
+    /// The loop period in CPU cycles.
+    const TICK_CYCLES: u32 = TICK_US * (config::board::CPU_HZ / 1_000_000);
+
+    /// The on-board log: a static, so that it counts in the image's DRAM
+    /// budget (`cargo fw-image`), not on the ROM's stack.
+    static mut LOG: RingLog<{ config::log::ROWS }> = RingLog::new();
 
     /// Telemetry and replies go out on UART0, one line each, CR LF.
     struct UartLines<'a>(&'a mut UART0Serial);
@@ -91,30 +104,44 @@ mod robot {
         let _ = writeln!(serial, "lidars {:?} {:?}, compass {:?}", up.front, up.right, compass_up);
 
         let servos = ServoPair::with_config(servo_timer.output());
-        let mut ctl = Controller::new(front, right, compass, servos, Pose::from_mm(0, 0, Angle::ZERO));
+        // SAFETY: `run` is entered once (main never returns): the only reference to LOG
+        let log = unsafe { &mut *core::ptr::addr_of_mut!(LOG) };
+        let start = Pose::from_mm(0, 0, Angle::ZERO);
+        let mut ctl = Controller::with_log(front, right, compass, servos, start, Arena::DEFAULT, log);
+        // a mission uploaded before a reset (RTC memory; not after power-off)
+        let mut store = RtcMissionStore;
+        if let Some(mission) = Mission::decode(&store.load()) {
+            let _ = writeln!(serial, "mission of {} steps kept from before the reset", mission.len());
+            ctl.set_mission(mission);
+        }
 
+        // The loop spins on CCOUNT and converts it to microseconds only for
+        // a tick: the conversion divides, which the lx106 does in software.
         let mut clock = MicrosClock::new();
-        let mut last_tick = clock.now_us();
+        let mut last_tick = Ccount.now();
         let mut last_blink = last_tick;
         start_watchdog(&mut watchdog);
         loop {
             watchdog.feed();
-            let now = clock.now_us();
+            let now = Ccount.now();
 
             // Commands: every byte waiting in the RX FIFO.
             while let Ok(byte) = serial.read() {
                 ctl.feed(byte, &mut UartLines(&mut serial));
             }
 
-            if now.wrapping_sub(last_tick) >= TICK_US {
+            if now.wrapping_sub(last_tick) >= TICK_CYCLES {
                 last_tick = now;
-                ctl.tick(now, &mut UartLines(&mut serial));
+                ctl.tick(clock.now_us(), &mut UartLines(&mut serial));
+            }
+            if ctl.take_mission_changed() {
+                store.save(&ctl.mission().encode());
             }
 
             // LED: slow blink when every sensor is up, fast when one is down.
             let healthy = ctl.front_health().up && ctl.right_health().up && ctl.compass_health().up;
             let half_ms = if healthy { config::board::LED_BLINK_OK_MS } else { config::board::LED_BLINK_FAULT_MS };
-            if now.wrapping_sub(last_blink) >= half_ms.saturating_mul(1_000) {
+            if now.wrapping_sub(last_blink) >= half_ms.saturating_mul(CYCLES_PER_MS) {
                 last_blink = now;
                 led.toggle();
             }

@@ -13,7 +13,8 @@
 //! The chip glue, [`esp8266`](self) (`esp8266.rs`), exists only for
 //! `target_arch = "xtensa"` with the `board` feature: esp8266-hal pins as
 //! [`bitbang_i2c::I2cPins`], the FRC1 interrupt, UART0, watchdog, LED and the
-//! panic handler. The firmware binary is `src/bin/firmware.rs`.
+//! panic handler; [`rtc_store`](self) (`rtc_store.rs`) keeps a mission in
+//! RTC memory across resets. The firmware binary is `src/bin/firmware.rs`.
 
 pub mod bitbang_i2c;
 pub mod servo_pulse;
@@ -26,3 +27,6 @@ pub mod sim_wire;
 
 #[cfg(all(target_arch = "xtensa", feature = "board"))]
 pub mod esp8266;
+/// The mission store in RTC memory (see the file).
+#[cfg(all(target_arch = "xtensa", feature = "board"))]
+pub mod rtc_store;

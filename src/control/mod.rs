@@ -1,6 +1,9 @@
 //! The control layer: the tick (sensing, state update, acting, deadman,
 //! telemetry) and the serial protocol.
 
+pub mod goto;
+pub mod log;
+pub mod mission;
 pub mod protocol;
 pub mod tick;
 

@@ -24,6 +24,13 @@
 //!          | "rate" ws hz
 //!          | "status"
 //!          | "help" | "?"
+//!          | "goto" ws x ws y                            on the estimate, see control::goto
+//!          | "face" ws heading
+//!          | "wait" ws duration
+//!          | "mission" ws ( "add" ws step | "list" | "clear" | "start" )
+//!          | "log" ws hz                                 on-board log rate in missions (0 = off)
+//!          | "dump"                                      sends the on-board log
+//! step     = a timed fwd/back/cw/ccw, wait, goto, face or pose command
 //! number   = [ "+" | "-" ] ( digits [ "." digits ] | "." digits )
 //!
 //! field     unit        decimals  range (config::serial)        fixed point
@@ -96,7 +103,7 @@ pub mod out_line;
 pub mod response;
 pub mod telemetry;
 
-pub use command::{format_command, parse, Command, Field, ParseError, Side};
+pub use command::{format_command, parse, Command, Field, MissionOp, ParseError, Side};
 pub use line::{Line, LineBuffer};
 pub use number::TextOut;
 pub use out_line::OutLine;

@@ -39,12 +39,21 @@
 //! per sample. Any valid command refreshes the deadman (and ends a sweep);
 //! a malformed line gets one `# err` line and changes nothing.
 //!
+//! Untethered (`untethered.rs`): `goto` and `face` drive on the estimate
+//! (`control::goto`); a mission (`control::mission`) runs its steps after
+//! a countdown, with its own time limit instead of the deadman, and any
+//! byte received while it runs aborts it; during a mission telemetry rows
+//! also go into the on-board log (`control::log`), which `dump` sends. The
+//! wall stop: a forward motion, whatever started it, stops when the front
+//! lidar sees something nearer than [`config::goto::WALL_STOP_MM`].
+//!
 //! No allocation, no panics: every buffer is a bounded `heapless` one, every
 //! clock difference is wrapping or saturating, every index is checked.
 
 mod clock;
 mod health;
 mod mode;
+mod untethered;
 mod views;
 
 use crate::config;
@@ -58,7 +67,7 @@ use crate::control::protocol::{
     ParseError, Response, Side, Telemetry, HELP, MAX_OUT_LINE,
 };
 use crate::driver::{CompassSample, HeadingSensor, LidarSample, MagCalibrate, Servos};
-use crate::math::{div_u64, Angle, Coord, Dt, Length, TurnRate};
+use crate::math::{div_u64, Angle, Dt, Length, TurnRate};
 use crate::model::compass::{CalStatus, CalibrationError, MagCalibration, MagCalibrator};
 use crate::model::estimator::{Estimator, Update};
 use crate::model::measurement::{Arena, LidarId};
@@ -66,6 +75,10 @@ use crate::model::{advance, ActuatorModel, Drive, Motion, Pose};
 pub use clock::TICK_US;
 pub use health::SensorHealth;
 pub use mode::Mode;
+pub use untethered::{MissionPhase, MissionRun};
+
+use crate::control::log::{RingLog, RowLog};
+use crate::control::mission::Mission;
 
 /// Where the loop writes its output lines (without terminators): the UART
 /// on the robot, a `Vec<String>` in tests, a channel in the simulator.
@@ -73,9 +86,11 @@ pub trait LineSink {
     fn write_line(&mut self, line: &str);
 }
 
-/// The control loop, generic over the drivers (see the module docs).
+/// The control loop, generic over the drivers and the on-board log (see
+/// the module docs). [`Controller::new`] has no log (every row is dropped
+/// and counted); [`Controller::with_log`] takes one.
 #[repr(C)]
-pub struct Controller<F, R, C, S> {
+pub struct Controller<F, R, C, S, L = RingLog<0>> {
     // tick bar: declared order (repr(C)), small and hot fields first: the
     // lx106's loads and stores take an offset of at most 255 bytes for a
     // u8, 510 for a u16 and 1020 for a u32, and a field further out costs
@@ -94,6 +109,8 @@ pub struct Controller<F, R, C, S> {
     calibration_done: bool,
     /// A sensor was re-initialised in this tick (the others wait a tick).
     reinit_ran: bool,
+    /// Readings since the last log row (`untethered::LOG_*` bits).
+    log_fresh: u8,
     /// Loop clock, us since the first tick.
     clock_us: u64,
     /// The `now_us` of the previous tick (`None` before the first).
@@ -127,6 +144,16 @@ pub struct Controller<F, R, C, S> {
     ticks: u64,
     /// The running magnetometer calibration sweep (in [`Mode::Calibrate`]).
     calibrator: Option<MagCalibrator>,
+    /// The running mission, if any.
+    run: Option<MissionRun>,
+    /// The on-board log's rate (0 = off) and schedule.
+    log_hz: u16,
+    log_period_us: u32,
+    next_log_us: Stamp,
+    /// The next log row `dump` sends (while it is sending).
+    dump_next: Option<usize>,
+    /// The mission changed since [`Controller::take_mission_changed`].
+    mission_changed: bool,
     front: F,
     right: R,
     compass: C,
@@ -135,6 +162,9 @@ pub struct Controller<F, R, C, S> {
     model: ActuatorModel,
     input: LineBuffer,
     out: OutLine<MAX_OUT_LINE>,
+    // tick bar: the mission and the log are large and off the tick's path: last
+    mission: Mission,
+    log: L,
 }
 
 impl<F, R, C, S> Controller<F, R, C, S>
@@ -153,6 +183,21 @@ where
 
     /// [`Controller::new`] in another arena (the simulator's).
     pub fn new_in(front: F, right: R, compass: C, servos: S, pose: Pose, arena: Arena) -> Self {
+        Controller::with_log(front, right, compass, servos, pose, arena, RingLog::new())
+    }
+}
+
+impl<F, R, C, S, L> Controller<F, R, C, S, L>
+where
+    F: crate::driver::RangeSensor,
+    R: crate::driver::RangeSensor,
+    C: HeadingSensor + MagCalibrate,
+    S: Servos,
+    L: RowLog,
+{
+    /// [`Controller::new_in`] with an on-board log (the firmware's is a
+    /// static, in the DRAM budget).
+    pub fn with_log(front: F, right: R, compass: C, servos: S, pose: Pose, arena: Arena, log: L) -> Self {
         let model = config::actuators::MODEL;
         Controller {
             front,
@@ -194,6 +239,15 @@ where
             calibrator: None,
             calibration_done: false,
             reinit_ran: false,
+            log_fresh: 0,
+            run: None,
+            log_hz: config::log::HZ,
+            log_period_us: telemetry_period_us(config::log::HZ),
+            next_log_us: 0,
+            dump_next: None,
+            mission_changed: false,
+            mission: Mission::new(),
+            log,
         }
     }
 
@@ -202,6 +256,7 @@ where
     /// Takes one received serial byte; a finished line is parsed and
     /// handled at once (its answer goes to `sink`).
     pub fn feed(&mut self, byte: u8, sink: &mut impl LineSink) {
+        self.byte_received(sink);
         match self.input.push(byte) {
             None => {}
             Some(Err(e)) => self.respond(&Response::Err(e), sink),
@@ -224,12 +279,15 @@ where
     /// motion the servos cannot drive as asked, the motion they drive).
     pub fn handle(&mut self, cmd: Command, sink: &mut impl LineSink) {
         self.command_seen = true;
+        self.command_received(sink);
         if matches!(self.mode, Mode::Calibrate { .. })
             && !matches!(cmd, Command::Status | Command::Help | Command::Rate { .. })
         {
             self.end_calibration(None, sink);
         }
-        if !matches!(cmd, Command::Drive { .. }) {
+        // a motion, a goto or face (which may be refused) and a mission
+        // start answer for themselves
+        if !matches!(cmd, Command::Drive { .. } | Command::Goto { .. } | Command::Face { .. } | Command::Mission(_)) {
             self.respond(&Response::Ok(&cmd), sink);
         }
         match cmd {
@@ -258,15 +316,7 @@ where
                     *drive = self.model.drive(drive.motion);
                 }
             }
-            Command::SetPose { x_mm, y_mm, heading } => {
-                let pose = Pose::new(
-                    Coord::from_length(Length::from_mm(x_mm)),
-                    Coord::from_length(Length::from_mm(y_mm)),
-                    heading,
-                );
-                self.estimator.reset(pose);
-                self.dead = pose;
-            }
+            Command::SetPose { x_mm, y_mm, heading } => self.set_pose(Pose::from_mm(x_mm, y_mm, heading)),
             Command::Calibrate { samples } => {
                 let calibrator = MagCalibrator::new(
                     self.compass.asa(),
@@ -296,7 +346,17 @@ where
                     sink.write_line(line);
                 }
             }
+            Command::Goto { .. } | Command::Face { .. } | Command::Wait { .. } => self.begin(&cmd, sink),
+            Command::Mission(op) => self.mission_op(op, &cmd, sink),
+            Command::Log { hz } => self.set_log_rate(hz),
+            Command::Dump => self.start_dump(sink),
         }
+    }
+
+    /// Sets the estimate (and the dead-reckoned pose) to `pose`.
+    fn set_pose(&mut self, pose: Pose) {
+        self.estimator.reset(pose);
+        self.dead = pose;
     }
 
     fn respond(&mut self, r: &Response, sink: &mut impl LineSink) {
@@ -365,8 +425,11 @@ where
             }
         }
 
-        // 6. telemetry
+        // 6. telemetry (and in a mission the on-board log)
         self.telemetry(now, sink);
+        if self.run.is_some() {
+            self.log_row(now);
+        }
     }
 
     /// Integrates `motion` over `dt_us` in steps of at most [`Dt::MAX`]
@@ -403,6 +466,7 @@ where
                 Ok(s) => {
                     self.sampled(Which::Compass, now);
                     self.fresh_compass = true;
+                    self.log_fresh |= untethered::LOG_COMPASS;
                     self.pending_heading = Some(s.heading);
                     if let Some(cal) = self.calibrator.as_mut() {
                         self.calibration_done = cal.feed(s.raw) == CalStatus::Done;
@@ -456,10 +520,37 @@ where
             self.finish_sweep(sink);
             return;
         }
-        let Some(timer) = self.mode.timer().copied() else { return };
+        if let Some(timer) = self.mode.timer().copied() {
+            self.timeout(timer, now, sink);
+        }
+        // tick bar: the untethered checks cost a few compares when no
+        // mission, goto or forward motion runs
+        if self.run.is_some() {
+            self.supervise(now, sink);
+        }
+        if matches!(self.mode, Mode::Goto { .. }) {
+            self.navigate(now, sink);
+        }
+        match self.mode {
+            Mode::Drive { drive: Drive { motion: Motion::Straight(v), .. }, .. }
+            | Mode::Goto { drive: Drive { motion: Motion::Straight(v), .. }, .. }
+            | Mode::Servo { motion: Motion::Straight(v), .. }
+                if v.to_bits() > 0 =>
+            {
+                self.wall_stop(now, sink)
+            }
+            _ => {}
+        }
+    }
+
+    /// A mode's timer: its end, or the deadman for an untimed one.
+    fn timeout(&mut self, timer: Timer, now: Stamp, sink: &mut impl LineSink) {
         match timer.remaining_us(now) {
             Some(0) if matches!(self.mode, Mode::Calibrate { .. }) => {
                 self.finish_sweep(sink);
+            }
+            Some(0) if matches!(self.mode, Mode::Goto { .. }) => {
+                self.halt("did not get there in time", now, sink);
             }
             Some(0) => {
                 self.mode = Mode::Idle;
@@ -513,13 +604,17 @@ where
     /// The servo commands and motion of the current mode.
     fn current_drive(&self) -> Drive {
         match self.mode {
-            Mode::Idle => self.model.stop(),
-            Mode::Drive { drive, .. } | Mode::Calibrate { drive, .. } => drive,
+            Mode::Idle | Mode::Wait { .. } => self.model.stop(),
+            Mode::Drive { drive, .. } | Mode::Calibrate { drive, .. } | Mode::Goto { drive, .. } => drive,
             Mode::Servo { left, right, motion, .. } => Drive { left, right, motion, saturated: false },
         }
     }
 
     fn telemetry(&mut self, now: Stamp, sink: &mut impl LineSink) {
+        if self.dump_next.is_some() {
+            // the log's rows go out instead (telemetry would mix with them)
+            return self.dump_rows(sink);
+        }
         if self.telemetry_hz == 0 || !reached(now, self.next_telemetry_us) {
             return;
         }
@@ -531,20 +626,33 @@ where
         if reached(now, self.next_telemetry_us) {
             self.next_telemetry_us = now.wrapping_add(self.telemetry_period_us);
         }
-        let t = Telemetry {
+        let fresh = [
+            core::mem::take(&mut self.fresh_front),
+            core::mem::take(&mut self.fresh_right),
+            core::mem::take(&mut self.fresh_compass),
+        ];
+        let t = self.snapshot(fresh);
+        self.out.clear();
+        if format_telemetry(&t, &mut self.out).is_ok() {
+            sink.write_line(&self.out);
+        }
+    }
+}
+
+impl<F, R, C, S, L> Controller<F, R, C, S, L> {
+    /// A telemetry row's values now, with the readings flagged fresh
+    /// (front, right, compass).
+    fn snapshot(&self, [front, right, compass]: [bool; 3]) -> Telemetry {
+        Telemetry {
             t_ms: self.t_ms(),
             pose: self.estimator.pose(),
-            front: self.last_front.filter(|_| core::mem::take(&mut self.fresh_front)),
-            right: self.last_right.filter(|_| core::mem::take(&mut self.fresh_right)),
-            compass: self.last_compass.filter(|_| core::mem::take(&mut self.fresh_compass)),
+            front: self.last_front.filter(|_| front),
+            right: self.last_right.filter(|_| right),
+            compass: self.last_compass.filter(|_| compass),
             motion: self.applied.motion,
             left_cmd: self.applied.left,
             right_cmd: self.applied.right,
             faults: self.faults,
-        };
-        self.out.clear();
-        if format_telemetry(&t, &mut self.out).is_ok() {
-            sink.write_line(&self.out);
         }
     }
 }

@@ -7,6 +7,7 @@
 pub mod arena;
 pub mod body;
 pub mod bus;
+pub mod link;
 pub mod mpu9250;
 pub mod noise;
 pub mod realism;
@@ -16,3 +17,4 @@ pub mod sensors;
 pub mod serve;
 pub mod svg;
 pub mod vl53l0x;
+pub mod wire;

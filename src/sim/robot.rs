@@ -33,6 +33,7 @@ use super::realism::{compass_disturbance, glancing_failure, lidar_range, Realism
 use super::script::Script;
 use super::sensors::{SimCompass, SimLidar, SimSensors};
 use crate::config;
+use crate::control::log::RingLog;
 use crate::control::{Controller, LineSink, TICK_US};
 use crate::driver::{HeadingSensor, Servos};
 use crate::math::Length;
@@ -60,8 +61,8 @@ impl Servos for SimServos {
     }
 }
 
-/// The control loop on the simulated drivers.
-pub type SimController = Controller<SimLidar, SimLidar, SimCompass, SimServos>;
+/// The control loop on the simulated drivers, with the robot's on-board log.
+pub type SimController = Controller<SimLidar, SimLidar, SimCompass, SimServos, RingLog<{ config::log::ROWS }>>;
 
 /// Noise levels (one sigma); [`Noise::OFF`] for exact runs.
 #[derive(Clone, Copy, PartialEq, Debug)]
@@ -181,7 +182,15 @@ impl SimRobot {
             length_x: Length::from_mm_f64(cfg.arena.length_x),
             width_y: Length::from_mm_f64(cfg.arena.width_y),
         };
-        let ctl = Controller::new_in(front, right, compass, SimServos::default(), cfg.start.to_pose(), arena);
+        let ctl = Controller::with_log(
+            front,
+            right,
+            compass,
+            SimServos::default(),
+            cfg.start.to_pose(),
+            arena,
+            RingLog::new(),
+        );
         let next_tick_ns = sensors.clock.now_ns();
         SimRobot {
             cfg,
@@ -256,27 +265,8 @@ impl SimRobot {
         clock.advance_ns(self.next_tick_ns.saturating_sub(clock.now_ns()));
     }
 
-    /// True when the nose (reference point) and both wheels are inside the
-    /// arena, and with [`Realism::whole_body`] the skid and both lidars too.
     fn fits(&self, p: &PoseF64) -> bool {
-        let d = config::geometry::ROTATION_TO_REFERENCE.to_mm_f64();
-        let (s, c) = p.theta.sin_cos();
-        let (ax, ay) = (p.x - d * c, p.y - d * s);
-        let h = config::sim::HALF_TRACK_MM;
-        let a = &self.cfg.arena;
-        let wheels = a.contains(p.x, p.y) && a.contains(ax - h * s, ay + h * c) && a.contains(ax + h * s, ay - h * c);
-        if !self.cfg.realism.whole_body {
-            return wheels;
-        }
-        let skid = config::geometry::SKID_BEHIND_AXLE.to_mm_f64();
-        let lidar_in = |m: &LidarMount| {
-            let (x, y, _) = p.lidar_ray(m);
-            a.contains(x, y)
-        };
-        wheels
-            && a.contains(ax - skid * c, ay - skid * s)
-            && lidar_in(&config::geometry::FRONT_LIDAR)
-            && lidar_in(&config::geometry::RIGHT_LIDAR)
+        body_fits(&self.cfg.arena, &self.cfg.realism, p)
     }
 
     /// Runs `script` (times from now) for `duration_us` of simulated time,
@@ -341,8 +331,30 @@ impl SimRobot {
     }
 }
 
+/// True when the nose (reference point) and both wheels are inside the
+/// arena, and with [`Realism::whole_body`] the skid and both lidars too.
+pub fn body_fits(a: &Arena, realism: &Realism, p: &PoseF64) -> bool {
+    let d = config::geometry::ROTATION_TO_REFERENCE.to_mm_f64();
+    let (s, c) = p.theta.sin_cos();
+    let (ax, ay) = (p.x - d * c, p.y - d * s);
+    let h = config::sim::HALF_TRACK_MM;
+    let wheels = a.contains(p.x, p.y) && a.contains(ax - h * s, ay + h * c) && a.contains(ax + h * s, ay - h * c);
+    if !realism.whole_body {
+        return wheels;
+    }
+    let skid = config::geometry::SKID_BEHIND_AXLE.to_mm_f64();
+    let lidar_in = |m: &LidarMount| {
+        let (x, y, _) = p.lidar_ray(m);
+        a.contains(x, y)
+    };
+    wheels
+        && a.contains(ax - skid * c, ay - skid * s)
+        && lidar_in(&config::geometry::FRONT_LIDAR)
+        && lidar_in(&config::geometry::RIGHT_LIDAR)
+}
+
 /// Sets the fake chips' truth for the body at `p`.
-fn set_truth(sensors: &SimSensors, cfg: &SimConfig, p: &PoseF64, rng: &mut Rng, disturbance_phase: f64) {
+pub fn set_truth(sensors: &SimSensors, cfg: &SimConfig, p: &PoseF64, rng: &mut Rng, disturbance_phase: f64) {
     let no_target = crate::model::lidar::NO_TARGET_READING;
     let lidar = |mount: &LidarMount, model: &LidarModel, rng: &mut Rng| -> u16 {
         let (x, y, dir) = p.lidar_ray(mount);

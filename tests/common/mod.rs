@@ -12,3 +12,16 @@ pub mod i2c;
 pub mod mpu9250;
 pub mod reference;
 pub mod vl53l0x_script;
+
+/// The bias and scale numbers of a `CALIBRATION` line as the robot prints
+/// it (`MagCalibration::from_f64([bx, by, bz], [sx, sy, sz])`).
+pub fn parse_calibration_line(line: &str) -> ([f64; 3], [f64; 3]) {
+    let inner = line.split("from_f64(").nth(1).unwrap_or_else(|| panic!("no from_f64( in {line}"));
+    let nums: Vec<f64> = inner
+        .split(|c: char| !(c.is_ascii_digit() || c == '.' || c == '-'))
+        .filter(|s| s.contains('.'))
+        .map(|s| s.parse().unwrap())
+        .collect();
+    assert_eq!(nums.len(), 6, "{line}");
+    ([nums[0], nums[1], nums[2]], [nums[3], nums[4], nums[5]])
+}

@@ -4,11 +4,16 @@
 //! on the project's QEMU board: UART0 output on stdout; with `--seconds` a
 //! timed, deterministic run (virtual time, `-icount`), otherwise UART0 on a
 //! pseudo-terminal until stopped. `--self-test` runs the board's checks.
+//! `--sim` wires the board's pins to the simulated robot (`sim.rs`),
+//! `--sim-test` checks the image driving it.
 
+mod cost;
 mod events;
 mod flash;
 mod qemu;
 mod selftest;
+mod sim;
+mod simtest;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -18,7 +23,8 @@ use qemu::{Board, Session};
 
 const USAGE: &str = "\
 usage: cargo fw-emu [--seconds S] [--input FILE] [--pulses]
-       cargo fw-emu --self-test
+       cargo fw-emu --sim [--script FILE] [--seconds S] [--seed N] [--fault F]... [--quiet]
+       cargo fw-emu --self-test | --sim-test
 
   --seconds S   stop after S virtual seconds (exit 0); without it the board
                 runs until stopped, UART0 on a pseudo-terminal
@@ -28,12 +34,25 @@ usage: cargo fw-emu [--seconds S] [--input FILE] [--pulses]
                 width_us=W (median period, last pulse's width)
   --self-test   boot the image and a watchdog test image, check the board
                 and the firmware on it; prints 'N passed, N failed'
+  --sim         the board's I2C, XSHUT and servo pins and UART0 wired to
+                the simulated robot (src/sim/link.rs): the script (default:
+                laps, as `simulate`) runs for --seconds (default 20) after
+                bring-up; prints simulate's summary and the loop's cost,
+                writes target/emu/sim.svg
+  --script FILE, --seed N   as for `cargo run --example simulate`
+  --fault KIND@A-B          a wire fault from A to B virtual seconds after
+                power-on: nack:ADDR (hex), sda-low, stall:front|right
+  --quiet       do not echo UART0
+  --sim-test    the image against the simulated robot: bring-up, a scripted
+                drive, the deadman, the loop rate, wire faults
 
 The event log (GPIO edges, input lines, resets; virtual ns) is left in
 target/emu/events.log.";
 
 /// Servo pins, left then right (config::pins).
 const SERVO_PINS: [u8; 2] = [5, 4];
+/// Seconds of robot time of a `--sim` run without `--seconds`.
+const DEFAULT_SIM_SECONDS: f64 = 20.0;
 /// Virtual ms before the first input line and between lines.
 const INPUT_GAP_MS: u32 = 100;
 
@@ -43,12 +62,16 @@ struct Options {
     input: Option<PathBuf>,
     pulses: bool,
     self_test: bool,
+    sim: Option<sim::SimOptions>,
+    quiet: bool,
+    sim_test: bool,
     help: bool,
 }
 
 impl Options {
     fn parse(args: &[String]) -> Result<Self, String> {
         let mut o = Options::default();
+        let mut sim_options = sim::SimOptions::default();
         let mut it = args.iter();
         while let Some(arg) = it.next() {
             let mut value = || it.next().ok_or_else(|| format!("{arg} needs a value"));
@@ -64,12 +87,29 @@ impl Options {
                 "--input" => o.input = Some(PathBuf::from(value()?)),
                 "--pulses" => o.pulses = true,
                 "--self-test" => o.self_test = true,
+                "--sim" => o.sim = Some(o.sim.take().unwrap_or_default()),
+                "--script" => sim_options.script = Some(PathBuf::from(value()?)),
+                "--seed" => {
+                    let v = value()?;
+                    sim_options.seed = Some(v.parse().map_err(|_| format!("--seed: '{v}' is not an integer"))?);
+                }
+                "--fault" => sim_options.faults.push(value()?.clone()),
+                "--quiet" => o.quiet = true,
+                "--sim-test" => o.sim_test = true,
                 "--help" | "-h" => o.help = true,
                 other => return Err(format!("fw-emu: unknown option '{other}'\n{USAGE}")),
             }
         }
         if o.pulses && o.seconds.is_none() {
             return Err("--pulses needs --seconds (the pulses are counted at the end)".into());
+        }
+        let wants_sim = sim_options != sim::SimOptions::default();
+        match o.sim.as_mut() {
+            Some(s) => {
+                *s = sim::SimOptions { seconds: o.seconds.unwrap_or(DEFAULT_SIM_SECONDS), ..sim_options };
+            }
+            None if wants_sim => return Err("--script, --seed and --fault need --sim".into()),
+            None => {}
         }
         Ok(o)
     }
@@ -91,6 +131,15 @@ pub fn main(args: &[String]) -> Result<(), String> {
     }
     let flash_path = work.join("flash.bin");
     write_flash(&flash_path, &boot, &irom)?;
+    if options.sim_test {
+        return simtest::run(&root, &board, &work, &flash_path);
+    }
+    if let Some(o) = &options.sim {
+        let run = sim::run(&root, &board, &work, &flash_path, "sim", o, !options.quiet)?;
+        eprint!("{}", run.summary);
+        println!("{}", run.cost.report());
+        return if run.simulator_ok { Ok(()) } else { Err("the simulated run failed (see above)".into()) };
+    }
     let banner = banner(&root)?;
     let events_path = work.join("events.log");
     let session = Session {
@@ -99,6 +148,8 @@ pub fn main(args: &[String]) -> Result<(), String> {
         input: options.input.as_deref(),
         input_after: &banner,
         input_gap_ms: INPUT_GAP_MS,
+        sim: None,
+        profile: None,
     };
     let Some(seconds) = options.seconds else {
         return board.run_pty(&session);

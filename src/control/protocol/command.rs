@@ -4,6 +4,7 @@
 use super::number::{parse_fixed, push_fixed, push_fixed_parts, push_str, push_u32, NumError, TextOut};
 use super::{Overflow, MAX_LINE};
 use crate::config::{compass, serial};
+use crate::control::mission::Step;
 use crate::math::{Angle, Speed, TurnRate};
 use crate::model::{Motion, ServoCmd, Trim};
 
@@ -53,6 +54,40 @@ pub enum Command {
     },
     Status,
     Help,
+    /// Drives the reference point to `(x, y)` on the estimate (`goto`).
+    Goto {
+        x_mm: i32,
+        y_mm: i32,
+    },
+    /// Turns in place to a heading on the estimate (`face`).
+    Face {
+        heading: Angle,
+    },
+    /// Stands still for a while (`wait`, a mission's pause).
+    Wait {
+        duration_ms: u32,
+    },
+    /// `mission add|list|clear|start`.
+    Mission(MissionOp),
+    /// Rows per second of the on-board log during a mission, 0 = off (`log`).
+    Log {
+        hz: u16,
+    },
+    /// Sends the on-board log (`dump`).
+    Dump,
+}
+
+/// What a `mission` command does.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub enum MissionOp {
+    /// Appends a step.
+    Add(Step),
+    /// Lists the steps.
+    List,
+    /// Forgets the steps.
+    Clear,
+    /// Starts the mission after the countdown.
+    Start,
 }
 
 /// A command argument: its name, unit, resolution and accepted range, for
@@ -83,6 +118,8 @@ pub enum Field {
     Samples,
     /// `rate`, Hz.
     Rate,
+    /// `mission`'s first word: `add`, `list`, `clear` or `start`.
+    Action,
 }
 
 impl Field {
@@ -101,6 +138,7 @@ impl Field {
             Field::Heading => "heading",
             Field::Samples => "samples",
             Field::Rate => "rate",
+            Field::Action => "mission action",
         }
     }
 
@@ -114,7 +152,7 @@ impl Field {
             Field::X | Field::Y => "mm",
             Field::Heading => "deg",
             Field::Rate => "Hz",
-            Field::LeftCommand | Field::RightCommand | Field::Side | Field::Samples => "",
+            Field::LeftCommand | Field::RightCommand | Field::Side | Field::Samples | Field::Action => "",
         }
     }
 
@@ -123,13 +161,14 @@ impl Field {
         match self {
             Field::Speed | Field::TurnRate | Field::Duration | Field::Heading => 3,
             Field::LeftCommand | Field::RightCommand | Field::Trim => 2,
-            Field::Side | Field::X | Field::Y | Field::Samples | Field::Rate => 0,
+            Field::Side | Field::X | Field::Y | Field::Samples | Field::Rate | Field::Action => 0,
         }
     }
 
     /// Accepted range, inclusive, in units of `10^-decimals` (speed in mm/s,
     /// turn rate in mrad/s, duration in ms, commands and trim in 1/100 step,
-    /// heading in millidegrees). `None` for [`Field::Side`] (not a number).
+    /// heading in millidegrees). `None` for [`Field::Side`] and
+    /// [`Field::Action`] (words, not numbers).
     pub fn range(self) -> Option<(i32, i32)> {
         // every limit is a small config constant (asserted below): the casts are exact
         let symmetric = |max: u32| ((max as i32).wrapping_neg(), max as i32);
@@ -138,7 +177,7 @@ impl Field {
             Field::TurnRate => (1, serial::MAX_TURN_MRAD_S as i32),
             Field::Duration => (1, serial::MAX_DURATION_MS as i32),
             Field::LeftCommand | Field::RightCommand => (0, 18_000),
-            Field::Side => return None,
+            Field::Side | Field::Action => return None,
             Field::Trim => symmetric(serial::MAX_TRIM_CENTI),
             Field::X | Field::Y => symmetric(serial::MAX_POSE_MM),
             Field::Heading => (-360_000, 360_000),
@@ -181,6 +220,8 @@ pub enum ParseError {
     BadChoice(Field),
     /// More arguments than the command takes.
     TrailingInput,
+    /// `mission add` with a command that cannot be a mission step.
+    NotAStep,
 }
 
 impl ParseError {
@@ -215,6 +256,9 @@ impl ParseError {
                 write_range(out, f)
             }
             ParseError::TrailingInput => push_str(out, "unexpected input after the arguments"),
+            ParseError::NotAStep => {
+                push_str(out, "not a mission step, want a timed fwd/back/cw/ccw, wait, goto, face or pose")
+            }
         }
     }
 }
@@ -235,9 +279,12 @@ fn write_want(out: &mut dyn TextOut, f: Field) -> Result<(), Overflow> {
     Ok(())
 }
 
-/// "0.001..0.300 m/s" ("left or right" for the trim side)
+/// "0.001..0.300 m/s" ("left or right" for the trim side, the choices of
+/// a mission action)
 fn write_range(out: &mut dyn TextOut, f: Field) -> Result<(), Overflow> {
-    let Some((lo, hi)) = f.range() else { return push_str(out, "left or right") };
+    let Some((lo, hi)) = f.range() else {
+        return push_str(out, if f == Field::Action { "add, list, clear or start" } else { "left or right" });
+    };
     push_fixed(out, lo, f.decimals())?;
     push_str(out, "..")?;
     push_fixed(out, hi, f.decimals())?;
@@ -318,6 +365,11 @@ const KEYWORDS: &[(&str, Keyword)] = &[
     ("status", Keyword::Status),
     ("help", Keyword::Help),
     ("?", Keyword::Help),
+    ("goto", Keyword::Goto),
+    ("face", Keyword::Face),
+    ("wait", Keyword::Wait),
+    ("log", Keyword::Log),
+    ("dump", Keyword::Dump),
 ];
 
 #[derive(Clone, Copy)]
@@ -335,6 +387,11 @@ enum Keyword {
     Rate,
     Status,
     Help,
+    Goto,
+    Face,
+    Wait,
+    Log,
+    Dump,
 }
 
 impl Keyword {
@@ -350,8 +407,11 @@ impl Keyword {
             Keyword::Trim => (&[Field::Side, Field::Trim], None),
             Keyword::Pose => (&[Field::X, Field::Y, Field::Heading], None),
             Keyword::Calibrate => (&[], Some(Field::Samples)),
-            Keyword::Rate => (&[Field::Rate], None),
-            Keyword::Stop | Keyword::Reset | Keyword::Status | Keyword::Help => (&[], None),
+            Keyword::Rate | Keyword::Log => (&[Field::Rate], None),
+            Keyword::Goto => (&[Field::X, Field::Y], None),
+            Keyword::Face => (&[Field::Heading], None),
+            Keyword::Wait => (&[], DURATION),
+            Keyword::Stop | Keyword::Reset | Keyword::Status | Keyword::Help | Keyword::Dump => (&[], None),
         }
     }
 }
@@ -365,6 +425,10 @@ pub fn parse(line: &[u8]) -> Result<Command, ParseError> {
     }
     if !line.iter().all(|&b| is_allowed(b)) {
         return Err(ParseError::NotAscii);
+    }
+    let (first, rest) = split_word(line);
+    if first.eq_ignore_ascii_case(b"mission") {
+        return parse_mission(rest);
     }
     let mut words = line.split(is_space).filter(|w| !w.is_empty());
     let word = words.next().ok_or(ParseError::Empty)?;
@@ -420,7 +484,47 @@ pub fn parse(line: &[u8]) -> Result<Command, ParseError> {
         Keyword::Rate => Command::Rate { hz: a as u16 },
         Keyword::Status => Command::Status,
         Keyword::Help => Command::Help,
+        // |x|, |y| <= MAX_POSE_MM
+        Keyword::Goto => Command::Goto { x_mm: a, y_mm: b },
+        Keyword::Face => Command::Face { heading: Angle::from_millidegrees(a) },
+        Keyword::Wait => {
+            Command::Wait { duration_ms: duration_ms.ok_or(ParseError::MissingArgument(Field::Duration))? }
+        }
+        Keyword::Log => Command::Log { hz: a as u16 },
+        Keyword::Dump => Command::Dump,
     })
+}
+
+/// The first word of `line` and what follows it.
+fn split_word(line: &[u8]) -> (&[u8], &[u8]) {
+    let start = line.iter().position(|b| !is_space(b)).unwrap_or(line.len());
+    let line = line.get(start..).unwrap_or(&[]);
+    let end = line.iter().position(is_space).unwrap_or(line.len());
+    (line.get(..end).unwrap_or(&[]), line.get(end..).unwrap_or(&[]))
+}
+
+/// `mission` and its action: `add <step>`, `list`, `clear`, `start`.
+fn parse_mission(rest: &[u8]) -> Result<Command, ParseError> {
+    let (action, rest) = split_word(rest);
+    let op = if action.is_empty() {
+        return Err(ParseError::MissingArgument(Field::Action));
+    } else if action.eq_ignore_ascii_case(b"add") {
+        // the step is a command line of its own
+        let cmd = parse(rest).map_err(|e| if e == ParseError::Empty { ParseError::NotAStep } else { e })?;
+        MissionOp::Add(Step::from_command(&cmd).ok_or(ParseError::NotAStep)?)
+    } else if action.eq_ignore_ascii_case(b"list") {
+        MissionOp::List
+    } else if action.eq_ignore_ascii_case(b"clear") {
+        MissionOp::Clear
+    } else if action.eq_ignore_ascii_case(b"start") {
+        MissionOp::Start
+    } else {
+        return Err(ParseError::BadChoice(Field::Action));
+    };
+    if !matches!(op, MissionOp::Add(_)) && !split_word(rest).0.is_empty() {
+        return Err(ParseError::TrailingInput);
+    }
+    Ok(Command::Mission(op))
 }
 
 /// ` <seconds>` with three decimals, if there is a duration.
@@ -484,5 +588,36 @@ pub fn format_command(cmd: &Command, out: &mut dyn TextOut) -> Result<(), Overfl
         }
         Command::Status => push_str(out, "status"),
         Command::Help => push_str(out, "help"),
+        Command::Goto { x_mm, y_mm } => {
+            push_str(out, "goto ")?;
+            push_fixed(out, x_mm, 0)?;
+            push_str(out, " ")?;
+            push_fixed(out, y_mm, 0)
+        }
+        Command::Face { heading } => {
+            push_str(out, "face ")?;
+            push_fixed_parts(out, false, heading.to_millidegrees(), 3)
+        }
+        Command::Wait { duration_ms } => {
+            push_str(out, "wait")?;
+            push_duration(out, Some(duration_ms))
+        }
+        Command::Mission(op) => {
+            push_str(out, "mission ")?;
+            match op {
+                MissionOp::Add(step) => {
+                    push_str(out, "add ")?;
+                    format_command(&step.command(), out)
+                }
+                MissionOp::List => push_str(out, "list"),
+                MissionOp::Clear => push_str(out, "clear"),
+                MissionOp::Start => push_str(out, "start"),
+            }
+        }
+        Command::Log { hz } => {
+            push_str(out, "log ")?;
+            push_u32(out, u32::from(hz))
+        }
+        Command::Dump => push_str(out, "dump"),
     }
 }

@@ -159,6 +159,12 @@ pub const HELP: &[&str] = &[
     "#  cal [<samples>]        magnetometer calibration sweep, 250..10000 samples (default 1000)",
     "#  rate <Hz>              telemetry rows per second 0..100 (0 = off)",
     "#  status | help",
+    "#  goto <x mm> <y mm>     drive there on the estimate (turn, then straight)",
+    "#  face <deg>             turn in place to a heading on the estimate",
+    "#  wait <s>               stand still 0.001..60.000 s",
+    "#  mission add <step>     append a timed fwd/back/cw/ccw, wait, goto, face or pose",
+    "#  mission list|clear|start  show, forget, run (after a countdown; any byte aborts)",
+    "#  log <Hz>               on-board log rows per second in a mission 0..100; dump sends it",
     "# telemetry: CSV rows after a header line; lines starting with # are not telemetry",
 ];
 

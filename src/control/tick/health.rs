@@ -38,7 +38,7 @@ pub(super) enum Which {
     Compass,
 }
 
-impl<F, R, C, S> Controller<F, R, C, S>
+impl<F, R, C, S, L> Controller<F, R, C, S, L>
 where
     F: crate::driver::RangeSensor,
     R: crate::driver::RangeSensor,
@@ -86,11 +86,12 @@ where
             Err(e) => return self.missed(which, e, now),
         };
         self.sampled(which, now);
-        let (fresh, last, pending) = if which == Which::Front {
-            (&mut self.fresh_front, &mut self.last_front, &mut self.pending_front)
+        let (fresh, last, pending, log_bit) = if which == Which::Front {
+            (&mut self.fresh_front, &mut self.last_front, &mut self.pending_front, super::untethered::LOG_FRONT)
         } else {
-            (&mut self.fresh_right, &mut self.last_right, &mut self.pending_right)
+            (&mut self.fresh_right, &mut self.last_right, &mut self.pending_right, super::untethered::LOG_RIGHT)
         };
+        self.log_fresh |= log_bit;
         *fresh = true;
         *last = Some(s);
         if let Range::Target(d) = s.range {
@@ -149,6 +150,12 @@ where
             h.up = false;
             h.retry_at_us = now.wrapping_add(ms_to_us(config::timing::SENSOR_RETRY_MS));
         }
+    }
+
+    /// The sensor is up and delivered within `config::timing::LIDAR_STALE_MS`.
+    pub(super) fn is_fresh(&self, which: Which, now: Stamp) -> bool {
+        let h = self.health(which);
+        h.up && now.wrapping_sub(h.last_sample_us) < ms_to_us(config::timing::LIDAR_STALE_MS)
     }
 
     pub(super) fn health(&self, which: Which) -> &SensorHealth {

@@ -1,7 +1,9 @@
-//! What the loop is doing: idle, driving, raw servo commands, or a
-//! calibration sweep, each with its timer.
+//! What the loop is doing: idle, driving, raw servo commands, a
+//! calibration sweep, going somewhere on the estimate, or waiting, each
+//! with its timer.
 
 use super::clock::Timer;
+use crate::control::goto::{Nav, Target};
 use crate::model::{Drive, Motion, ServoCmd};
 
 /// What the loop is doing.
@@ -16,6 +18,11 @@ pub enum Mode {
     Servo { left: ServoCmd, right: ServoCmd, motion: Motion, timer: Timer },
     /// Turning in place while the magnetometer calibration collects samples.
     Calibrate { drive: Drive, timer: Timer },
+    /// `goto` or `face`: `drive` is this tick's leg (see `control::goto`),
+    /// the timer its time limit.
+    Goto { nav: Nav, drive: Drive, timer: Timer },
+    /// Standing still for a while (`wait`).
+    Wait { timer: Timer },
 }
 
 impl Mode {
@@ -26,18 +33,29 @@ impl Mode {
             Mode::Drive { .. } => "drive",
             Mode::Servo { .. } => "servo",
             Mode::Calibrate { .. } => "cal",
+            Mode::Goto { nav: Nav { target: Target::Point { .. }, .. }, .. } => "goto",
+            Mode::Goto { .. } => "face",
+            Mode::Wait { .. } => "wait",
         }
     }
     pub(super) fn timer(&self) -> Option<&Timer> {
         match self {
             Mode::Idle => None,
-            Mode::Drive { timer, .. } | Mode::Servo { timer, .. } | Mode::Calibrate { timer, .. } => Some(timer),
+            Mode::Drive { timer, .. }
+            | Mode::Servo { timer, .. }
+            | Mode::Calibrate { timer, .. }
+            | Mode::Goto { timer, .. }
+            | Mode::Wait { timer } => Some(timer),
         }
     }
     pub(super) fn timer_mut(&mut self) -> Option<&mut Timer> {
         match self {
             Mode::Idle => None,
-            Mode::Drive { timer, .. } | Mode::Servo { timer, .. } | Mode::Calibrate { timer, .. } => Some(timer),
+            Mode::Drive { timer, .. }
+            | Mode::Servo { timer, .. }
+            | Mode::Calibrate { timer, .. }
+            | Mode::Goto { timer, .. }
+            | Mode::Wait { timer } => Some(timer),
         }
     }
 }

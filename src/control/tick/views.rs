@@ -9,7 +9,7 @@ use crate::driver::{CompassSample, LidarSample};
 use crate::model::estimator::Estimator;
 use crate::model::{ActuatorModel, Drive, Pose};
 
-impl<F, R, C, S> Controller<F, R, C, S> {
+impl<F, R, C, S, L> Controller<F, R, C, S, L> {
     /// Loop clock in ms (wraps after 49 days: the truncation is intended).
     pub fn t_ms(&self) -> u32 {
         whole_ms(self.clock_us)

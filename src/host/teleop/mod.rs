@@ -17,12 +17,15 @@
 //!   messages) as plain text panels;
 //! - [`link`]: serial bytes to lines, and the line mode for scripts
 //!   ([`link::run_line_mode`]): send a file of commands, print what comes back;
-//! - [`plan`]: the line mode's command file (`@t` / `+t` times, comments).
+//! - [`plan`]: the line mode's command file (`@t` / `+t` times, comments);
+//! - [`mission`]: a mission file uploaded, started, and the on-board log
+//!   downloaded.
 
 pub mod dashboard;
 pub mod drive;
 pub mod keys;
 pub mod link;
+pub mod mission;
 pub mod plan;
 pub mod record;
 pub mod speed;

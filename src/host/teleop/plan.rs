@@ -57,7 +57,7 @@ fn parse_ms(t: &str) -> Option<u64> {
 }
 
 /// The protocol's refusal of a line as text.
-fn refusal(e: ParseError) -> String {
+pub(super) fn refusal(e: ParseError) -> String {
     let mut s: heapless::String<MAX_RESPONSE> = heapless::String::new();
     let _ = e.write(&mut s);
     s.as_str().to_string()

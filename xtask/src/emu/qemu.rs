@@ -11,6 +11,10 @@ use std::process::{Command, Stdio};
 /// run of the same image and input is the same run.
 const ICOUNT_SHIFT: u32 = 4;
 
+/// Virtual ns between PC samples: prime, so the samples do not lock onto
+/// the loop's or the I2C clock's period.
+pub const PROFILE_NS: u32 = 10_007;
+
 /// The built board: QEMU, the ROM and the watchdog test image.
 pub struct Board {
     dir: PathBuf,
@@ -26,6 +30,10 @@ pub struct Session<'a> {
     pub input_after: &'a str,
     /// Virtual ms before the first input line and between lines.
     pub input_gap_ms: u32,
+    /// The simulator's socket (`sim.rs`): the pins wired to the simulated robot.
+    pub sim: Option<&'a Path>,
+    /// Where the board writes its PC samples.
+    pub profile: Option<&'a Path>,
 }
 
 /// What a timed run printed.
@@ -71,6 +79,12 @@ impl Board {
                 s.input_after.replace(',', ",,"),
                 s.input_gap_ms
             );
+        }
+        if let Some(sim) = s.sim {
+            machine += &format!(",sim={}", value(sim));
+        }
+        if let Some(profile) = s.profile {
+            machine += &format!(",profile={},profile-ns={PROFILE_NS}", value(profile));
         }
         if let Some(ms) = stop_ms {
             machine += &format!(",stop-ms={ms}");

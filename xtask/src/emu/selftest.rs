@@ -22,13 +22,24 @@ const PERIOD_TOLERANCE_US: f64 = 20.0;
 /// polls it).
 const BLINK_TOLERANCE_MS: f64 = 10.0;
 
-struct Report {
+#[derive(Default)]
+pub(super) struct Report {
     passed: usize,
     failed: usize,
 }
 
 impl Report {
-    fn check(&mut self, name: &str, ok: bool, detail: impl std::fmt::Display) {
+    /// `N passed, N failed`; an error when a check failed.
+    pub(super) fn finish(&self) -> Result<(), String> {
+        println!("{} passed, {} failed", self.passed, self.failed);
+        if self.failed == 0 {
+            Ok(())
+        } else {
+            Err(format!("{} check(s) failed", self.failed))
+        }
+    }
+
+    pub(super) fn check(&mut self, name: &str, ok: bool, detail: impl std::fmt::Display) {
         if ok {
             self.passed += 1;
             println!("ok    {name}: {detail}");
@@ -40,9 +51,9 @@ impl Report {
 }
 
 /// The numbers the checks need from src/config.rs.
-struct Expect {
+pub(super) struct Expect {
     banner: String,
-    deadman_ns: u64,
+    pub(super) deadman_ns: u64,
     blink_fault_ms: f64,
     frame_us: f64,
     pulse_at_0_us: f64,
@@ -50,7 +61,7 @@ struct Expect {
 }
 
 impl Expect {
-    fn load(root: &Path) -> Result<Self, String> {
+    pub(super) fn load(root: &Path) -> Result<Self, String> {
         let config = String::from_utf8_lossy(&read(&root.join("src/config.rs"))?).into_owned();
         let get = |name: &str| config_u32(&config, name).ok_or(format!("src/config.rs has no `const {name}: u32`"));
         Ok(Expect {
@@ -64,7 +75,7 @@ impl Expect {
     }
 
     /// The pulse width of a servo command in steps (0..180, untrimmed).
-    fn width_us(&self, steps: f64) -> f64 {
+    pub(super) fn width_us(&self, steps: f64) -> f64 {
         self.pulse_at_0_us + (self.pulse_at_180_us - self.pulse_at_0_us) * steps / 180.0
     }
 }
@@ -100,6 +111,8 @@ fn boot(
         input: (!input.is_empty()).then_some(&input_path),
         input_after: after,
         input_gap_ms: INPUT_GAP_MS,
+        sim: None,
+        profile: None,
     };
     let output = board.run_timed(&session, (seconds * 1000.0) as u32, false)?;
     let events = read_events(&events_path)?;

@@ -1,0 +1,158 @@
+//! `cargo fw-emu --sim-test`: the unchanged image driving the simulated
+//! robot through the emulated board's pins (`sim.rs`). Checks: bring-up
+//! finds both lidars at their new addresses and the compass; the built-in
+//! 20 s drive ends with the estimate within 10 mm of the truth; the deadman
+//! stops the wheels; the loop runs at its configured rate; and after each
+//! wire fault (a chip that NACKs, SDA held low, a lidar that never gets
+//! ready) the image recovers: the fault is counted and the sensor reads
+//! again. Prints `N passed, N failed`; fails when any check does.
+
+use std::path::Path;
+
+use super::events::{summarize, Events};
+use super::qemu::Board;
+use super::selftest::{Expect, Report};
+use super::sim::{self, SimOptions, SimRun};
+
+const MS: u64 = 1_000_000;
+/// The bar of the scripted drive: estimate error at the end, mm.
+const DRIVE_ERROR_MM: f64 = 10.0;
+/// Servo pins, left then right (config::pins).
+const SERVO_PINS: [u8; 2] = [5, 4];
+/// Telemetry columns (control::protocol::telemetry::HEADER).
+const FRONT_RAW: usize = 9;
+const RIGHT_RAW: usize = 11;
+const COMPASS: usize = 19;
+const F_BUS: usize = 20;
+const F_TIMEOUT: usize = 21;
+const F_MISSING: usize = 22;
+
+/// Telemetry rows of a run's UART0 output, split into fields.
+fn rows(uart: &str) -> Vec<Vec<&str>> {
+    uart.lines()
+        .map(|l| l.trim_end().split(',').collect::<Vec<_>>())
+        .filter(|f| f.len() == 26 && f[0].parse::<u32>().is_ok())
+        .collect()
+}
+
+fn t_ms(row: &[&str]) -> u32 {
+    row[0].parse().unwrap_or(0)
+}
+
+fn counter(row: &[&str], col: usize) -> u64 {
+    row.get(col).and_then(|v| v.parse().ok()).unwrap_or(0)
+}
+
+/// Rows of the last `ms` of the run.
+fn last<'a>(rows: &'a [Vec<&'a str>], ms: u32) -> &'a [Vec<&'a str>] {
+    let end = rows.last().map_or(0, |r| t_ms(r));
+    let from = rows.partition_point(|r| t_ms(r) + ms < end);
+    &rows[from..]
+}
+
+fn reads(rows: &[Vec<&str>], col: usize) -> usize {
+    rows.iter().filter(|r| !r[col].is_empty()).count()
+}
+
+fn script(work: &Path, name: &str, text: &str) -> Result<std::path::PathBuf, String> {
+    let path = work.join(format!("simtest-{name}.script"));
+    std::fs::write(&path, text).map_err(|e| format!("{}: {e}", path.display()))?;
+    Ok(path)
+}
+
+/// The number after `label` in the simulator's summary.
+fn summary_number(summary: &str, label: &str) -> Option<f64> {
+    let rest = &summary[summary.find(label)? + label.len()..];
+    rest.split_whitespace().next()?.trim_end_matches(',').parse().ok()
+}
+
+pub fn run(root: &Path, board: &Board, work: &Path, flash: &Path) -> Result<(), String> {
+    let e = Expect::load(root)?;
+    let mut r = Report::default();
+    let go = |name: &str, o: SimOptions| -> Result<SimRun, String> {
+        sim::run(root, board, work, flash, &format!("simtest-{name}"), &o, false)
+    };
+
+    // bring-up and the built-in 20 s drive
+    let drive = go("drive", SimOptions { seconds: 20.0, ..SimOptions::default() })?;
+    let config = std::fs::read_to_string(root.join("src/config.rs")).map_err(|e| format!("src/config.rs: {e}"))?;
+    let addr = |name: &str| {
+        let prefix = format!("pub const {name}: u8 = 0x");
+        config.lines().find_map(|l| l.trim().strip_prefix(&prefix)?.strip_suffix(';').map(str::to_lowercase))
+    };
+    let want = format!(
+        "lidar addresses: front 0x{}, right 0x{}",
+        addr("FRONT_LIDAR_ADDR").unwrap_or_default(),
+        addr("RIGHT_LIDAR_ADDR").unwrap_or_default()
+    );
+    let up = drive.output.uart.contains("lidars Ok(()) Ok(()), compass Ok(())");
+    r.check(
+        "bring-up over the wire finds both lidars at their new addresses and the compass",
+        up && drive.summary.contains(&want),
+        format!("{}; {want}", if up { "all three up" } else { "a sensor down" }),
+    );
+    let err = summary_number(&drive.summary, "estimate error at the end").unwrap_or(f64::INFINITY);
+    r.check(
+        "the built-in 20 s drive ends with the estimate near the truth",
+        drive.simulator_ok && err <= DRIVE_ERROR_MM,
+        format!("{err:.1} mm (bar {DRIVE_ERROR_MM} mm)"),
+    );
+    let work_ips = drive.cost.work_per_second();
+    r.check("the loop's cost is measured", work_ips > 0.0, format!("{:.3} M instructions/s of work", work_ips / 1e6));
+
+    // the deadman: an untimed raw command, then silence
+    let deadman = go(
+        "deadman",
+        SimOptions { script: Some(script(work, "deadman", "@0 servo 120 60\n")?), seconds: 1.5, ..Default::default() },
+    )?;
+    let events = Events::parse(&std::fs::read_to_string(&deadman.events).map_err(|e| e.to_string())?)?;
+    let end = events.edges.last().map_or(0, |e| e.ns);
+    let neutral = e.width_us(90.0);
+    let widths: Vec<Option<f64>> =
+        SERVO_PINS.iter().map(|p| summarize(&events.pulses(*p, end.saturating_sub(200 * MS), end)).width_us).collect();
+    let stopped = widths.iter().all(|w| w.is_some_and(|w| (w - neutral).abs() <= 5.0));
+    let said = deadman.output.uart.contains("deadman");
+    r.check(
+        "the deadman stops the wheels",
+        stopped && said,
+        format!(
+            "widths at the end {widths:?} us (neutral {neutral:.0}); {}",
+            if said { "reported" } else { "not reported" }
+        ),
+    );
+
+    // the loop rate: a row every tick
+    let rate = go(
+        "rate",
+        SimOptions { script: Some(script(work, "rate", "@0 rate 100\n")?), seconds: 2.0, ..Default::default() },
+    )?;
+    let rows_rate = rows(&rate.output.uart);
+    let second = last(&rows_rate, 1000);
+    let gaps: Vec<u32> = second.windows(2).map(|w| t_ms(&w[1]) - t_ms(&w[0])).collect();
+    let tick_ms = 1000 / 100;
+    r.check(
+        "the loop runs at its configured rate (100 Hz)",
+        second.len() >= 99 && gaps.iter().all(|g| g.abs_diff(tick_ms) <= 1),
+        format!("{} rows in the last second, gaps {:?}..{:?} ms", second.len(), gaps.iter().min(), gaps.iter().max()),
+    );
+
+    // wire faults, each from 2 s after power-on; 3 s to recover
+    let faults: [(&str, &str, usize, &[usize]); 3] = [
+        ("nack", "nack:0c@2-2.5", COMPASS, &[F_BUS, F_MISSING, F_TIMEOUT]),
+        ("sda-low", "sda-low@2-2.3", FRONT_RAW, &[F_BUS]),
+        ("stall", "stall:front@2-3", FRONT_RAW, &[F_TIMEOUT]),
+    ];
+    for (name, fault, col, counters) in faults {
+        let run = go(name, SimOptions { seconds: 6.0, faults: vec![fault.into()], ..Default::default() })?;
+        let all = rows(&run.output.uart);
+        let end = last(&all, 1000);
+        let counted: u64 = all.last().map_or(0, |row| counters.iter().map(|c| counter(row, *c)).sum());
+        let back = [FRONT_RAW, RIGHT_RAW, COMPASS].map(|c| reads(end, c));
+        r.check(
+            &format!("the image recovers from {fault}"),
+            counted > 0 && reads(end, col) > 0 && back.iter().all(|n| *n > 0),
+            format!("faults counted {counted}; readings in the last second front/right/compass {back:?}"),
+        );
+    }
+    r.finish()
+}
