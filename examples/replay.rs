@@ -61,14 +61,15 @@ fn parse_args() -> Result<Option<Args>, String> {
 fn run(a: Args) -> Result<(), String> {
     let (lx, wy) = a.arena;
     let arena = Arena { length_x: Length::from_mm_f64(lx), width_y: Length::from_mm_f64(wy) };
+    // a typed start is checked before the log is read
+    let typed = a.start.as_deref().map(|s| args::start(s, lx, wy)).transpose()?;
     let text = std::fs::read_to_string(&a.log).map_err(|e| format!("{}: {e}", a.log))?;
     let samples = replay::parse(&text).map_err(|e| format!("{}: {e}", a.log))?;
     if samples.is_empty() {
         return Err(format!("{}: the log has a header but no rows; nothing to replay", a.log));
     }
-    let start = match &a.start {
-        Some(s) => {
-            let (x, y, deg) = args::start(s, lx, wy)?;
+    let start = match typed {
+        Some((x, y, deg)) => {
             replay::Start::Pose(Pose::new(Coord::from_mm_f64(x), Coord::from_mm_f64(y), Angle::from_degrees_f64(deg)))
         }
         None => {
