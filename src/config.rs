@@ -503,10 +503,12 @@ pub mod sim {
     pub const FIELD_HORIZONTAL_COUNTS: f64 = 160.0;
     /// Vertical (down) earth field, counts: about 38 uT at UCLA (NOAA WMM).
     pub const FIELD_DOWN_COUNTS: f64 = 253.0;
-    /// Where the default run starts, mm and degrees: a lap around the box
-    /// (see `sim::script::DEFAULT`) from its south-west quarter.
-    pub const START_X_MM: f64 = 180.0;
-    pub const START_Y_MM: f64 = 130.0;
+    /// Where the default run starts, mm and degrees: the first corner of
+    /// the built-in laps (`sim::script::default_script`), 170 mm from the
+    /// south and west walls, where the front lidar's cone meets the wall
+    /// ahead before the side wall.
+    pub const START_X_MM: f64 = 170.0;
+    pub const START_Y_MM: f64 = 170.0;
     pub const START_HEADING_DEG: f64 = 0.0;
     /// Half the car's width at the wheels, mm (the 85 mm axle): a wheel
     /// that would pass a wall is a collision.

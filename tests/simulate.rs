@@ -59,7 +59,8 @@ fn scripts_parse_times_in_seconds_or_ms_and_refuse_bad_lines() {
 #[test]
 fn the_default_script_is_valid_and_lasts_the_duration() {
     let s = Script::parse(&default_script(60.0)).unwrap();
-    assert!(s.end_us() < 60_000_000 && s.end_us() > 55_000_000, "{}", s.end_us());
+    // the last goto has its leg's time (4 or 6 s) before the end
+    assert!(s.end_us() <= 56_000_000 && s.end_us() > 50_000_000, "{}", s.end_us());
     assert!(s.lines.iter().all(|l| paperbot::control::protocol::parse(l.command.as_bytes()).is_ok()));
 }
 
@@ -219,13 +220,12 @@ fn the_default_minute_drives_laps_without_touching_a_wall() {
     assert_eq!(robot.collisions(), 0);
     let a = robot.cfg.arena;
     let min_clearance = samples.iter().map(|s| a.clearance(s.truth.x, s.truth.y)).fold(f64::MAX, f64::min);
-    // the realistic robot's speeds and pivots spread from run to run, so
-    // its open-loop laps wander (24 mm from a wall at seed 1; the ideal
-    // robot's stay 30 mm clear), but the whole body stays off the walls
+    // the laps are gotos steered by the estimate: the realistic robot's
+    // speed spread and pivots do not take it near a wall
     assert!(min_clearance > 15.0, "{min_clearance}");
     // it went around: both ends of the box visited
     let xs: Vec<f64> = samples.iter().map(|s| s.truth.x).collect();
-    assert!(xs.iter().cloned().fold(f64::MAX, f64::min) < 150.0 && xs.iter().cloned().fold(0.0, f64::max) > 550.0);
+    assert!(xs.iter().cloned().fold(f64::MAX, f64::min) < 200.0 && xs.iter().cloned().fold(0.0, f64::max) > 550.0);
     let f = robot.controller().faults();
     assert_eq!((f.bus, f.timeout, f.missing, f.bad_sample, f.overruns), (0, 0, 0, 0, 0));
 }
