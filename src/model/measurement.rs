@@ -130,85 +130,94 @@ const SIN_HALF_CONE: i32 = crate::math::round_f64(
 ) as i32;
 const ONE: i32 = 1 << 30;
 
-/// The four products of the axis's `|cos|`, `|sin|` (Q2.30) with the half
-/// cone's cosine and sine, from which both walls' cone incidences follow
-/// ([`Cone::toward`]): `cos(a - h) = cos a cos h + sin a sin h`,
-/// `sin(a - h) = sin a cos h - cos a sin h`.
+/// The cone's incidences on a wall, from the axis's `|cos|` and `|sin|`
+/// (Q2.30) on it, `n` and `t`, and the half cone `h`: the cone's direction
+/// nearest the normal of the wall ahead meets it at `cos(a - h) = n cos h +
+/// t sin h` (square on, 1, when the normal is inside the cone: `n >= cos
+/// h`), the wall behind at `cos(pi - a - h) = t sin h - n cos h`; the
+/// sines are `t cos h - n sin h` and `t cos h + n sin h`.
+// tick bar: the products only where a wall is met off square (a wall
+// square ahead needs none), each pair shared by the wall behind
 #[derive(Clone, Copy)]
-struct Cone {
-    c_ch: i32,
-    s_sh: i32,
-    s_ch: i32,
-    c_sh: i32,
+struct Incidence {
+    /// `n cos h` and `t sin h`.
+    n_ch: i32,
+    t_sh: i32,
 }
 
-impl Cone {
-    // tick bar: four products shared by both walls
+impl Incidence {
     #[inline(always)]
-    fn new(abs_c: i32, abs_s: i32) -> Cone {
-        // |c|, |s| <= 2^30 and the half cone's below: each product below 2^30
-        Cone {
-            c_ch: mul_q30_unsat(abs_c, COS_HALF_CONE),
-            s_sh: mul_q30_unsat(abs_s, SIN_HALF_CONE),
-            s_ch: mul_q30_unsat(abs_s, COS_HALF_CONE),
-            c_sh: mul_q30_unsat(abs_c, SIN_HALF_CONE),
-        }
+    fn new(n: i32, t: i32) -> Incidence {
+        // |n|, |t| <= 2^30 and the half cone's below: each product below 2^30
+        Incidence { n_ch: mul_q30_unsat(n, COS_HALF_CONE), t_sh: mul_q30_unsat(t, SIN_HALF_CONE) }
     }
-
-    /// `(cos, sin)` of the incidence of the cone's direction nearest the
-    /// normal of a wall of constant x (`x_wall`) or y, ahead of the axis
-    /// (`ahead`) or behind it: `(1, 0)` when the normal is in the cone; a
-    /// cosine at or below 0 means the wall is not in the cone.
-    // tick bar
+    /// The cosine toward the wall ahead (off square) or behind.
     #[inline(always)]
-    fn toward(&self, x_wall: bool, ahead: bool) -> (i32, i32) {
-        // the axis's |cos incidence| n and |sin| t on that wall, times cos h and sin h
-        let (n_ch, t_sh, t_ch, n_sh) = if x_wall {
-            (self.c_ch, self.s_sh, self.s_ch, self.c_sh)
+    fn cos(&self, ahead: bool) -> i32 {
+        if ahead {
+            self.n_ch + self.t_sh
         } else {
-            (self.s_ch, self.c_sh, self.c_ch, self.s_sh)
-        };
-        if !ahead {
-            // cos incidence -n: cos(a - h) = -n ch + t sh, sin(a - h) = t ch + n sh
-            return (t_sh - n_ch, t_ch + n_sh);
-        }
-        if n_ch >= COS_HALF_SQ {
-            (ONE, 0)
-        } else {
-            (n_ch + t_sh, t_ch - n_sh)
+            self.t_sh - self.n_ch
         }
     }
 }
 
-/// `cos^2` of half the cone (Q2.30): the axis's `|cos| cos h` is at least
-/// this exactly when `|cos| >= cos h`, the wall's normal inside the cone.
-const COS_HALF_SQ: i32 = crate::math::round_f64(
-    crate::math::cos_f64(config::lidar::CONE_DEG / 2.0 * core::f64::consts::TAU / 360.0)
-        * crate::math::cos_f64(config::lidar::CONE_DEG / 2.0 * core::f64::consts::TAU / 360.0)
-        * 1_073_741_824.0,
-) as i32;
+/// The sine of the cone's incidence on the wall ahead (0 when square on)
+/// or behind, for the axis's `|cos|` `n` and `|sin|` `t` on it (see
+/// [`Incidence`]): only for the wall a beam is taken on.
+fn cone_sine(n: i32, t: i32, ahead: bool) -> i32 {
+    if ahead && n >= COS_HALF_CONE {
+        return 0;
+    }
+    // each product below 2^30
+    let t_ch = mul_q30_unsat(t, COS_HALF_CONE);
+    let n_sh = mul_q30_unsat(n, SIN_HALF_CONE);
+    if ahead {
+        t_ch - n_sh
+    } else {
+        t_ch + n_sh
+    }
+}
 
 /// Of two opposite walls at distances `a` (the one the axis heads for) and
-/// `b` along their normal, with the axis's `|cos|` on them `n`: whether
-/// `b`'s wall is nearer in the cone, and the chosen wall's distance and
-/// cone cosine and sine. The far wall is in the cone only when the axis is
-/// within half the cone of parallel to it.
+/// `b` along their normal, with the axis's `|cos|` on them `n` and `|sin|`
+/// `t`: whether `b`'s wall is nearer in the cone, and the chosen wall's
+/// distance and cone cosine. The far wall is in the cone only when the axis
+/// is within half the cone of parallel to it.
 // tick bar: the second wall only when the axis runs near parallel
 #[inline(always)]
-fn nearer_of(cone: &Cone, x_wall: bool, n: i32, a: Length, b: Length) -> (bool, Length, (i32, i32)) {
-    let ca = cone.toward(x_wall, true);
+fn nearer_of(n: i32, t: i32, a: Length, b: Length) -> (bool, Length, i32) {
+    if n >= COS_HALF_CONE {
+        return (false, a, ONE);
+    }
+    let inc = Incidence::new(n, t);
+    let ca = inc.cos(true);
     if n > SIN_HALF_CONE {
         return (false, a, ca);
     }
-    let cb = cone.toward(x_wall, false);
-    if cb.0 <= 0 {
+    let cb = inc.cos(false);
+    // the wall behind is met less square (cb <= ca): nearer in the cone
+    // only when it is nearer along its normal too
+    if cb <= 0 || a <= b {
         return (false, a, ca);
     }
     // a / ca <= b / cb, i.e. a cb <= b ca (each distance clamped at 0)
-    if ca.0 > 0 && mul_hi(a.0.max(0), cb.0) <= mul_hi(b.0.max(0), ca.0) {
+    if ca > 0 && mul_hi(a.0.max(0), cb) <= mul_hi(b.0.max(0), ca) {
         (false, a, ca)
     } else {
         (true, b, cb)
+    }
+}
+
+/// `mul_hi(a, n)` for a cone cosine `n` (Q2.30): exactly `a >> 2` when
+/// the wall is met square on (`n` = 1, the common case).
+// tick bar: the square-on case without a product
+#[inline(always)]
+fn mul_cos(a: i32, n: i32) -> i32 {
+    if n == ONE {
+        a >> 2
+    } else {
+        mul_hi(a, n)
     }
 }
 
@@ -246,9 +255,12 @@ pub struct Beam {
     /// Distance from the lidar to the wall, along the wall's normal
     /// (negative if the lidar is outside the box).
     pub to_wall: Length,
-    /// The other candidate wall's distance along its own normal, and its
-    /// cone cosine (for the corner test).
-    other_to_wall: Length,
+    /// The cone's distances to the two candidate walls, cross-multiplied
+    /// (division-free): this wall's distance times the other's cone
+    /// cosine, and the other's distance times this one's, Q14 mm; and the
+    /// other's cone cosine (for the corner test).
+    cross: i32,
+    other_cross: i32,
     other_normal: i32,
     /// How far the lidar sits behind the reference point along its beam
     /// (the model output is the range from the lidar less this).
@@ -298,27 +310,26 @@ impl Beam {
         // axis runs within half the cone of parallel and that one is nearer.
         let (north, south) = (arena.length_x.saturating_sub(lx), lx);
         let (east, west) = (arena.width_y.saturating_sub(ly), ly);
-        let cone = Cone::new(abs_c, abs_s);
-        let (x_wall, ax, (nx, tx)) = if cos >= 0 {
-            let (far, a, c) = nearer_of(&cone, true, abs_c, north, south);
-            (if far { Wall::South } else { Wall::North }, a, c)
-        } else {
-            let (far, a, c) = nearer_of(&cone, true, abs_c, south, north);
-            (if far { Wall::North } else { Wall::South }, a, c)
+        let (x_far, ax, nx) =
+            if cos >= 0 { nearer_of(abs_c, abs_s, north, south) } else { nearer_of(abs_c, abs_s, south, north) };
+        let x_wall = match (cos >= 0, x_far) {
+            (true, false) | (false, true) => Wall::North,
+            _ => Wall::South,
         };
-        let (y_wall, ay, (ny, ty)) = if sin >= 0 {
-            let (far, a, c) = nearer_of(&cone, false, abs_s, east, west);
-            (if far { Wall::West } else { Wall::East }, a, c)
-        } else {
-            let (far, a, c) = nearer_of(&cone, false, abs_s, west, east);
-            (if far { Wall::East } else { Wall::West }, a, c)
+        let (y_far, ay, ny) =
+            if sin >= 0 { nearer_of(abs_s, abs_c, east, west) } else { nearer_of(abs_s, abs_c, west, east) };
+        let y_wall = match (sin >= 0, y_far) {
+            (true, false) | (false, true) => Wall::East,
+            _ => Wall::West,
         };
         // The x-wall is nearer in the cone when A_x / n_x <= A_y / n_y, i.e.
         // A_x n_y <= A_y n_x (a negative A, a lidar outside the box, counts
         // as 0; a wall out of the cone, n <= 0, is never nearer).
-        let x_first = ny <= 0 || (nx > 0 && mul_hi(ax.0.max(0), ny.max(0)) <= mul_hi(ay.0.max(0), nx.max(0)));
-        let (wall, normal, cone_normal, cone_tangent, to_wall, other_to_wall, other_normal) =
-            if x_first { (x_wall, abs_c, nx, tx, ax, ay, ny) } else { (y_wall, abs_s, ny, ty, ay, ax, nx) };
+        let (ax_ny, ay_nx) = (mul_cos(ax.0.max(0), ny.max(0)), mul_cos(ay.0.max(0), nx.max(0)));
+        let x_first = ny <= 0 || (nx > 0 && ax_ny <= ay_nx);
+        let (wall, normal, cone_normal, to_wall, cross, other_cross, other_normal) =
+            if x_first { (x_wall, abs_c, nx, ax, ax_ny, ay_nx, ny) } else { (y_wall, abs_s, ny, ay, ay_nx, ax_ny, nx) };
+        let cone_tangent = if x_first { cone_sine(abs_c, abs_s, !x_far) } else { cone_sine(abs_s, abs_c, !y_far) };
         // d(to_wall)/d(theta) with the sign the module docs give the lever:
         // x-walls f sin th + r cos th = dy, y-walls -(f cos th - r sin th) = -dx
         let mount_lever = if wall.is_x_wall() { dy } else { dx.saturating_neg() };
@@ -331,7 +342,8 @@ impl Beam {
             cone_normal: cone_normal.max(1),
             cone_tangent,
             to_wall,
-            other_to_wall,
+            cross,
+            other_cross,
             other_normal: other_normal.max(1),
             setback,
             mount_lever: Length(mount_lever),
@@ -382,14 +394,13 @@ impl Beam {
     /// are less than `margin` apart in range. Division-free:
     /// `|A_x n_y - A_y n_x| < margin n_x n_y` with the cone cosines `n`.
     pub fn near_corner(&self, margin: Length) -> bool {
-        // In Q14 mm by mul_hi (Q16 * Q30 / 2^32), each within 3 LSB
-        // (2^-12 mm) below the exact product: A >= 0 and 0 < n <= 2^30
-        // keep every product in [0, 2^29), their difference in i32.
-        let a = mul_hi(self.to_wall.0.max(0), self.other_normal);
-        let b = mul_hi(self.other_to_wall.0.max(0), self.cone_normal);
+        // The products were made choosing the wall: in Q14 mm by mul_hi
+        // (Q16 * Q30 / 2^32), each within 3 LSB (2^-12 mm) below the exact
+        // one; A >= 0 and 0 <= n <= 2^30 keep each in [0, 2^29), their
+        // difference in i32.
         // n n in Q28 (<= 2^28), << 2 -> Q30; margin (Q16) times it -> Q14.
-        let cs = mul_hi(self.cone_normal, self.other_normal) << 2;
-        (a - b).abs() < mul_hi(margin.0.max(0), cs)
+        let cs = mul_cos(self.other_normal, self.cone_normal) << 2;
+        (self.cross - self.other_cross).abs() < mul_hi(margin.0.max(0), cs)
     }
 
     /// The expected lidar model output (distance from the reference point
