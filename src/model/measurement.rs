@@ -233,6 +233,87 @@ fn mount_product(l: Length, t: i32) -> i32 {
     }
 }
 
+/// The largest margin [`Beam::near_corner`] tells apart: twice the
+/// estimator's (larger margins are taken as this one).
+pub const CORNER_MARGIN_MAX: Length = Length(config::estimator::CORNER_MARGIN.0 * 2);
+
+/// The cone's other candidate wall, for [`Beam::near_corner`].
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+enum Corner {
+    /// Farther in the cone than [`CORNER_MARGIN_MAX`] beyond the beam's wall.
+    Clear,
+    /// The cone's distances to the two candidate walls, cross-multiplied
+    /// (division-free): the beam's wall's distance times the other's cone
+    /// cosine, and the other's distance times the beam's wall's, Q14 mm;
+    /// and the other's cone cosine.
+    Cross { cross: i32, other_cross: i32, other_normal: i32 },
+}
+
+/// An allowance of 2^-10 (Q2.30) on the side walls' cone cosine in
+/// [`sides_clear`], for the fixed point's rounding.
+const SIDE_ALLOWANCE: i32 = 1 << 20;
+
+/// For a beam whose axis is nearer the normal of the wall ahead than the
+/// side walls' (its `|cos|` on that wall `n` at least its `|sin|` `t`), at
+/// `ahead` from that wall along its normal, with the cone's cosine there
+/// `cone_normal`: whether the side walls, the nearer at `side` along their
+/// normal, are certainly farther in the cone than [`CORNER_MARGIN_MAX`]
+/// beyond the wall ahead. The cone's cosine on a side wall is at most
+/// `t cos h + n sin h <= t + sin h` (half cone `h`), so the side walls are
+/// at least `side / (t + sin h)` away in the cone, the wall ahead
+/// `ahead / cone_normal`: `(ahead + CORNER_MARGIN_MAX) (t + sin h) <= side
+/// cone_normal` is enough. With [`SIDE_ALLOWANCE`] (above 1 mm of the
+/// margin in Q14 mm, against a few LSB of rounding) it decides exactly what
+/// the cone's products would ([`cone_walls`]: the wall ahead, and never
+/// near a corner for a margin up to the largest).
+#[inline(always)]
+fn sides_clear(ahead: Length, side: Length, t: i32, cone_normal: i32) -> bool {
+    // t <= 2^30 / sqrt 2 (t <= n): the sum below 2^30; the products in Q14
+    // mm. A side at or behind the lidar (<= 0) is never clear.
+    let reach = mul_hi(ahead.0.max(0).saturating_add(CORNER_MARGIN_MAX.0), t + SIN_HALF_CONE + SIDE_ALLOWANCE);
+    reach <= mul_hi(side.0, cone_normal)
+}
+
+/// The wall the nearest point in the cone is on, found with the cone's
+/// products on both axes (the walls' distances along their normals from
+/// the lidar, the axis's sine and cosine): the wall, the axis's and the
+/// cone's cosines on it, the cone's sine, its distance and the corner test.
+fn cone_walls(
+    north: Length,
+    south: Length,
+    east: Length,
+    west: Length,
+    sin: i32,
+    cos: i32,
+) -> (Wall, i32, i32, i32, Length, Corner) {
+    // |sin|, |cos| <= 2^30: the absolute values cannot overflow.
+    let (abs_s, abs_c) = (sin.wrapping_abs(), cos.wrapping_abs());
+    // Each axis: the wall the axis heads for, or the one behind when the
+    // axis runs within half the cone of parallel and that one is nearer.
+    let (x_far, ax, nx) =
+        if cos >= 0 { nearer_of(abs_c, abs_s, north, south) } else { nearer_of(abs_c, abs_s, south, north) };
+    let x_wall = match (cos >= 0, x_far) {
+        (true, false) | (false, true) => Wall::North,
+        _ => Wall::South,
+    };
+    let (y_far, ay, ny) =
+        if sin >= 0 { nearer_of(abs_s, abs_c, east, west) } else { nearer_of(abs_s, abs_c, west, east) };
+    let y_wall = match (sin >= 0, y_far) {
+        (true, false) | (false, true) => Wall::East,
+        _ => Wall::West,
+    };
+    // The x-wall is nearer in the cone when A_x / n_x <= A_y / n_y, i.e.
+    // A_x n_y <= A_y n_x (a negative A, a lidar outside the box, counts
+    // as 0; a wall out of the cone, n <= 0, is never nearer).
+    let (ax_ny, ay_nx) = (mul_cos(ax.0.max(0), ny.max(0)), mul_cos(ay.0.max(0), nx.max(0)));
+    let x_first = ny <= 0 || (nx > 0 && ax_ny <= ay_nx);
+    let (wall, normal, cone_normal, to_wall, cross, other_cross, other_normal) =
+        if x_first { (x_wall, abs_c, nx, ax, ax_ny, ay_nx, ny) } else { (y_wall, abs_s, ny, ay, ay_nx, ax_ny, nx) };
+    let cone_tangent = if x_first { cone_sine(abs_c, abs_s, !x_far) } else { cone_sine(abs_s, abs_c, !y_far) };
+    let corner = Corner::Cross { cross, other_cross, other_normal: other_normal.max(1) };
+    (wall, normal, cone_normal.max(1), cone_tangent, to_wall, corner)
+}
+
 /// The geometry of one lidar reading in the arena for one pose: which wall
 /// the nearest point in the lidar's cone is on, and how the reading
 /// depends on the pose (see the module docs).
@@ -255,13 +336,9 @@ pub struct Beam {
     /// Distance from the lidar to the wall, along the wall's normal
     /// (negative if the lidar is outside the box).
     pub to_wall: Length,
-    /// The cone's distances to the two candidate walls, cross-multiplied
-    /// (division-free): this wall's distance times the other's cone
-    /// cosine, and the other's distance times this one's, Q14 mm; and the
-    /// other's cone cosine (for the corner test).
-    cross: i32,
-    other_cross: i32,
-    other_normal: i32,
+    /// How near the cone's other candidate wall is (for the corner test;
+    /// not searched when it is clear by [`CORNER_MARGIN_MAX`]).
+    corner: Corner,
     /// How far the lidar sits behind the reference point along its beam
     /// (the model output is the range from the lidar less this).
     pub setback: Length,
@@ -306,30 +383,32 @@ impl Beam {
         let ly = coord_length(pose.y).saturating_add(Length(dy));
         // |sin|, |cos| <= 2^30: the absolute values cannot overflow.
         let (abs_s, abs_c) = (sin.wrapping_abs(), cos.wrapping_abs());
-        // Each axis: the wall the axis heads for, or the one behind when the
-        // axis runs within half the cone of parallel and that one is nearer.
         let (north, south) = (arena.length_x.saturating_sub(lx), lx);
         let (east, west) = (arena.width_y.saturating_sub(ly), ly);
-        let (x_far, ax, nx) =
-            if cos >= 0 { nearer_of(abs_c, abs_s, north, south) } else { nearer_of(abs_c, abs_s, south, north) };
-        let x_wall = match (cos >= 0, x_far) {
-            (true, false) | (false, true) => Wall::North,
-            _ => Wall::South,
+        // The wall the axis heads for on the axis it runs nearer (x when
+        // |cos| >= |sin|): its cone's cosine, and whether the side walls are
+        // clear of the cone ahead of it (see `sides_clear`). Then the side
+        // walls need none of the cone's work.
+        // tick bar: beams from the middle of the box are such
+        let x_main = abs_c >= abs_s;
+        let (n, t, ahead, side) = if x_main {
+            (abs_c, abs_s, if cos >= 0 { north } else { south }, east.min(west))
+        } else {
+            (abs_s, abs_c, if sin >= 0 { east } else { west }, north.min(south))
         };
-        let (y_far, ay, ny) =
-            if sin >= 0 { nearer_of(abs_s, abs_c, east, west) } else { nearer_of(abs_s, abs_c, west, east) };
-        let y_wall = match (sin >= 0, y_far) {
-            (true, false) | (false, true) => Wall::East,
-            _ => Wall::West,
+        // n >= 1/sqrt(2): the wall behind is out of the cone
+        let cone_normal = if n >= COS_HALF_CONE { ONE } else { Incidence::new(n, t).cos(true) };
+        let (wall, normal, cone_normal, cone_tangent, to_wall, corner) = if sides_clear(ahead, side, t, cone_normal) {
+            let wall = match (x_main, cos >= 0, sin >= 0) {
+                (true, true, _) => Wall::North,
+                (true, false, _) => Wall::South,
+                (false, _, true) => Wall::East,
+                (false, _, false) => Wall::West,
+            };
+            (wall, n, cone_normal, cone_sine(n, t, true), ahead, Corner::Clear)
+        } else {
+            cone_walls(north, south, east, west, sin, cos)
         };
-        // The x-wall is nearer in the cone when A_x / n_x <= A_y / n_y, i.e.
-        // A_x n_y <= A_y n_x (a negative A, a lidar outside the box, counts
-        // as 0; a wall out of the cone, n <= 0, is never nearer).
-        let (ax_ny, ay_nx) = (mul_cos(ax.0.max(0), ny.max(0)), mul_cos(ay.0.max(0), nx.max(0)));
-        let x_first = ny <= 0 || (nx > 0 && ax_ny <= ay_nx);
-        let (wall, normal, cone_normal, to_wall, cross, other_cross, other_normal) =
-            if x_first { (x_wall, abs_c, nx, ax, ax_ny, ay_nx, ny) } else { (y_wall, abs_s, ny, ay, ay_nx, ax_ny, nx) };
-        let cone_tangent = if x_first { cone_sine(abs_c, abs_s, !x_far) } else { cone_sine(abs_s, abs_c, !y_far) };
         // d(to_wall)/d(theta) with the sign the module docs give the lever:
         // x-walls f sin th + r cos th = dy, y-walls -(f cos th - r sin th) = -dx
         let mount_lever = if wall.is_x_wall() { dy } else { dx.saturating_neg() };
@@ -339,12 +418,10 @@ impl Beam {
             sin,
             cos,
             normal,
-            cone_normal: cone_normal.max(1),
+            cone_normal,
             cone_tangent,
             to_wall,
-            cross,
-            other_cross,
-            other_normal: other_normal.max(1),
+            corner,
             setback,
             mount_lever: Length(mount_lever),
         }
@@ -391,16 +468,21 @@ impl Beam {
     }
 
     /// True when the nearest points in the cone on the two candidate walls
-    /// are less than `margin` apart in range. Division-free:
+    /// are less than `margin` (at most [`CORNER_MARGIN_MAX`]) apart in
+    /// range. Division-free:
     /// `|A_x n_y - A_y n_x| < margin n_x n_y` with the cone cosines `n`.
     pub fn near_corner(&self, margin: Length) -> bool {
+        let Corner::Cross { cross, other_cross, other_normal } = self.corner else {
+            return false;
+        };
         // The products were made choosing the wall: in Q14 mm by mul_hi
         // (Q16 * Q30 / 2^32), each within 3 LSB (2^-12 mm) below the exact
         // one; A >= 0 and 0 <= n <= 2^30 keep each in [0, 2^29), their
         // difference in i32.
         // n n in Q28 (<= 2^28), << 2 -> Q30; margin (Q16) times it -> Q14.
-        let cs = mul_cos(self.other_normal, self.cone_normal) << 2;
-        (self.cross - self.other_cross).abs() < mul_hi(margin.0.max(0), cs)
+        let cs = mul_cos(other_normal, self.cone_normal) << 2;
+        let margin = margin.0.clamp(0, CORNER_MARGIN_MAX.0);
+        (cross - other_cross).abs() < mul_hi(margin, cs)
     }
 
     /// The expected lidar model output (distance from the reference point
@@ -427,4 +509,54 @@ pub fn expected_lidar(arena: &Arena, pose: &Pose, which: LidarId) -> Option<Leng
 /// already gives the heading clockwise from north in the arena's frame).
 pub fn expected_heading(pose: &Pose) -> Angle {
     pose.theta
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Wherever `sides_clear` spares the side walls' cone work, the full
+    /// search ([`cone_walls`]) gives the same wall, cosines and distance, and
+    /// no corner within the largest margin: poses every 5 mm and 1 degree
+    /// over a band of the box, both mounts.
+    #[test]
+    fn sides_clear_decides_as_the_full_search() {
+        let arena = Arena::DEFAULT;
+        let (mut clear, mut full) = (0u32, 0u32);
+        for x in (5..760).step_by(15) {
+            for y in (5..495).step_by(10) {
+                for deg in 0..360 {
+                    let pose = Pose::from_mm(x, y, Angle::from_millidegrees(deg * 1000));
+                    for id in [LidarId::Front, LidarId::Right] {
+                        let beam = Beam::new(&arena, &pose, &id.mount());
+                        if beam.corner != Corner::Clear {
+                            full += 1;
+                            continue;
+                        }
+                        clear += 1;
+                        let mount = id.mount();
+                        let (st, ct) = { pose }.sin_cos();
+                        let dx = mount_product(mount.forward, ct).saturating_sub(mount_product(mount.right, st));
+                        let dy = mount_product(mount.forward, st).saturating_add(mount_product(mount.right, ct));
+                        let px = coord_length(pose.x).saturating_add(Length(dx));
+                        let py = coord_length(pose.y).saturating_add(Length(dy));
+                        let (north, south) = (arena.length_x.saturating_sub(px), px);
+                        let (east, west) = (arena.width_y.saturating_sub(py), py);
+                        let (wall, normal, cone_normal, cone_tangent, to_wall, corner) =
+                            cone_walls(north, south, east, west, beam.sin, beam.cos);
+                        let at = (x, y, deg, id);
+                        assert_eq!(
+                            (wall, normal, cone_normal, cone_tangent, to_wall),
+                            (beam.wall, beam.normal, beam.cone_normal, beam.cone_tangent, beam.to_wall),
+                            "{at:?}"
+                        );
+                        let full_beam = Beam { corner, ..beam };
+                        assert!(!full_beam.near_corner(CORNER_MARGIN_MAX), "{at:?}");
+                    }
+                }
+            }
+        }
+        // both ways are taken (about a third of these beams take the short one)
+        assert!(clear > 0 && full > 0, "{clear} clear, {full} searched");
+    }
 }
