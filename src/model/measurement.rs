@@ -264,8 +264,8 @@ const SIDE_ALLOWANCE: i32 = 1 << 20;
 /// `ahead / cone_normal`: `(ahead + CORNER_MARGIN_MAX) (t + sin h) <= side
 /// cone_normal` is enough. With [`SIDE_ALLOWANCE`] (above 1 mm of the
 /// margin in Q14 mm, against a few LSB of rounding) it decides exactly what
-/// the cone's products would ([`cone_walls`]: the wall ahead, and never
-/// near a corner for a margin up to the largest).
+/// the cone's products on both axes would: the wall ahead, and never near a
+/// corner for a margin up to the largest (the unit test below checks it).
 #[inline(always)]
 fn sides_clear(ahead: Length, side: Length, t: i32, cone_normal: i32) -> bool {
     // t <= 2^30 / sqrt 2 (t <= n): the sum below 2^30; the products in Q14
@@ -512,10 +512,11 @@ pub fn expected_heading(pose: &Pose) -> Angle {
 mod tests {
     use super::*;
 
-    /// The reference: the wall the nearest point in the cone is on, found with the cone's
-    /// products on both axes (the walls' distances along their normals from
-    /// the lidar, the axis's sine and cosine): the wall, the axis's and the
-    /// cone's cosines on it, the cone's sine, its distance and the corner test.
+    /// The reference: the wall the nearest point in the cone is on, found
+    /// with the cone's products on both axes (the walls' distances along
+    /// their normals from the lidar, the axis's sine and cosine): the wall,
+    /// the axis's and the cone's cosines on it, the cone's sine, its
+    /// distance and the corner test.
     fn cone_walls(
         north: Length,
         south: Length,
