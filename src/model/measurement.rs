@@ -322,7 +322,7 @@ pub struct Beam {
     /// hits the wall square on.
     pub normal: i32,
     /// The cone's: cos of the incidence of the cone's direction nearest the
-    /// wall's normal (1 inside the cone; see [`cone`]), and its sine.
+    /// wall's normal (1 inside the cone; see `Incidence`), and its sine.
     pub cone_normal: i32,
     cone_tangent: i32,
     /// Distance from the lidar to the wall, along the wall's normal
