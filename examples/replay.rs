@@ -2,15 +2,18 @@
 //!
 //! ```text
 //! cargo run --example replay -- LOG.csv [options]
-//!   --start X,Y,DEG    start pose, mm, mm, degrees clockwise from north (default: the arena's centre facing north)
+//!   --start X,Y,DEG    start pose, mm, mm, degrees clockwise from north (default: found by the robot's
+//!                      localization from the first readings, as at power-up)
 //!   --arena LxW        arena size in mm, x (north) by y (east) (default 762.5x495)
 //!   --out FILE         SVG output (default replay.svg; written only when the log has rows)
 //! ```
 //!
 //! LOG.csv has the header `t_ms,left_cmd,right_cmd,front_mm,right_mm,heading_deg`
 //! (see `paperbot::model::estimator::replay`). Writes `t_ms,x_mm,y_mm,theta_deg`
-//! to stdout and the estimated path as SVG. The options take the same syntax
-//! as `simulate`'s.
+//! to stdout and the estimated path as SVG, with each lidar reading drawn
+//! from the lidar to where its beam ended (the model's distance along the
+//! beam from the estimated pose): blue the front lidar, green the right. The
+//! options take the same syntax as `simulate`'s.
 
 use paperbot::host::args;
 use paperbot::math::{Angle, Coord, Length};
@@ -18,12 +21,12 @@ use paperbot::model::estimator::replay;
 use paperbot::model::measurement::Arena;
 use paperbot::model::Pose;
 use paperbot::sim::body::PoseF64;
-use paperbot::sim::svg::{render, Track};
+use paperbot::sim::svg::{render_with_rays, Ray, Track};
 use std::process::ExitCode;
 
 fn usage() -> String {
     let doc = include_str!("replay.rs");
-    doc.lines().skip(3).take(4).map(|l| l.trim_start_matches("//! ")).collect::<Vec<_>>().join("\n")
+    doc.lines().skip(3).take(5).map(|l| l.trim_start_matches("//! ")).collect::<Vec<_>>().join("\n")
 }
 
 struct Args {
@@ -57,17 +60,35 @@ fn parse_args() -> Result<Option<Args>, String> {
 
 fn run(a: Args) -> Result<(), String> {
     let (lx, wy) = a.arena;
-    let (x, y, deg) = match &a.start {
-        Some(s) => args::start(s, lx, wy)?,
-        None => (lx / 2.0, wy / 2.0, 0.0),
-    };
-    let start = Pose::new(Coord::from_mm_f64(x), Coord::from_mm_f64(y), Angle::from_degrees_f64(deg));
     let arena = Arena { length_x: Length::from_mm_f64(lx), width_y: Length::from_mm_f64(wy) };
+    // a typed start is checked before the log is read
+    let typed = a.start.as_deref().map(|s| args::start(s, lx, wy)).transpose()?;
     let text = std::fs::read_to_string(&a.log).map_err(|e| format!("{}: {e}", a.log))?;
     let samples = replay::parse(&text).map_err(|e| format!("{}: {e}", a.log))?;
     if samples.is_empty() {
         return Err(format!("{}: the log has a header but no rows; nothing to replay", a.log));
     }
+    let start = match typed {
+        Some((x, y, deg)) => {
+            replay::Start::Pose(Pose::new(Coord::from_mm_f64(x), Coord::from_mm_f64(y), Angle::from_degrees_f64(deg)))
+        }
+        None => {
+            let fix = replay::locate_start(&samples, arena)
+                .map_err(|e| format!("{}: no start found by localization ({e:?}); give --start", a.log))?;
+            let p = PoseF64::from_pose(&fix.pose);
+            eprintln!(
+                "replay: located at x {:.0} y {:.0} mm, heading {:.1} deg (sigma {:.0} / {:.0} mm, {} points{})",
+                p.x,
+                p.y,
+                p.theta.to_degrees(),
+                fix.sigma_x.to_mm_f64(),
+                fix.sigma_y.to_mm_f64(),
+                fix.points,
+                if fix.ambiguous { ", AMBIGUOUS: the readings fit places far apart" } else { "" }
+            );
+            replay::Start::Fix(fix)
+        }
+    };
     let (estimates, stats) = replay::replay(&samples, start, arena);
     print!("{}", replay::to_csv(&estimates));
     let poses: Vec<PoseF64> = estimates
@@ -78,7 +99,8 @@ fn run(a: Args) -> Result<(), String> {
     let title = format!("paperbot replay of {}: {} rows, {seconds:.1} s", a.log, samples.len());
     let track =
         Track { label: "firmware estimate from the recorded readings", color: "#d62728", dashed: false, poses: &poses };
-    let svg = render(&paperbot::sim::arena::Arena::new(lx, wy), &[track], &title);
+    let rays = lidar_rays(&samples, &estimates);
+    let svg = render_with_rays(&paperbot::sim::arena::Arena::new(lx, wy), &[track], &rays, &title);
     std::fs::write(&a.out, svg).map_err(|e| format!("{}: {e}", a.out))?;
     let sensor = |name: &str, s: &paperbot::model::estimator::SensorStats| {
         format!("{name} {} accepted, {} outliers, {} unusable", s.accepted, s.outliers, s.unusable)
@@ -92,6 +114,29 @@ fn run(a: Args) -> Result<(), String> {
         a.out
     );
     Ok(())
+}
+
+/// Each row's lidar readings as rays from the lidar (at the row's estimate)
+/// to where the beam ended: the model's distance from the reference point
+/// along the beam, plus the mount's setback.
+fn lidar_rays<'a>(samples: &[replay::Sample], estimates: &[replay::Estimate]) -> Vec<Ray<'a>> {
+    use paperbot::config::{geometry, lidar};
+    let mut rays = Vec::new();
+    for (s, e) in samples.iter().zip(estimates) {
+        let pose = PoseF64::from_pose(&e.pose);
+        for (reading, mount, model, color) in [
+            (s.front_mm, geometry::FRONT_LIDAR, lidar::FRONT, "#1f77b4"),
+            (s.right_mm, geometry::RIGHT_LIDAR, lidar::RIGHT, "#2ca02c"),
+        ] {
+            let Some(d) = reading.and_then(|r| model.range(r).distance()) else { continue };
+            let (x, y, dir) = pose.lidar_ray(&mount);
+            let (bs, bc) = mount.direction.to_radians_f64().sin_cos();
+            let setback = -(mount.forward.to_mm_f64() * bc + mount.right.to_mm_f64() * bs);
+            let range = d.to_mm_f64() + setback;
+            rays.push(Ray { from: (x, y), to: (x + range * dir.cos(), y + range * dir.sin()), color });
+        }
+    }
+    rays
 }
 
 fn main() -> ExitCode {

@@ -11,6 +11,13 @@
 //!   --seed N           noise seed (default 1)
 //!   --no-noise         exact run: no motion, lidar or compass noise
 //!   --kinematics K     rigid (default) or report (the report's turn equations)
+//!   --ideal            turn the realistic effects below off but the cone (rigid turns, ...)
+//!   --body B           whole (default: lidars and skid kept in the box too) or wheels
+//!   --speed-spread F   trial-to-trial speed spread, one sigma, all motions (default: the lab's per motion)
+//!   --pivot MM,SD      turns pivot MM behind the axle, SD from turn to turn (default 10,5)
+//!   --cone DEG         lidar cone, full angle (default 25; 0: a thin ray)
+//!   --glancing DEG     incidence past which lidar readings start failing (default 60; 90: never)
+//!   --compass-disturbance DEG  heading error varying over the floor (default 2)
 //!   --out FILE         SVG output (default simulate.svg)
 //!   --quiet            do not print the robot's serial output (the summary still goes to stderr)
 //!   --print-script     print the script (the built-in one unless --script) and exit
@@ -32,6 +39,7 @@ use std::time::Instant;
 use paperbot::host::args;
 use paperbot::sim::arena::Arena;
 use paperbot::sim::body::{Kinematics, PoseF64};
+use paperbot::sim::realism::Realism;
 use paperbot::sim::robot::{Noise, SimConfig, SimRobot};
 use paperbot::sim::script::{default_script, Script};
 use paperbot::sim::svg::{render, Track};
@@ -77,6 +85,26 @@ fn parse_args() -> Result<Option<Args>, String> {
                     k => return Err(format!("--kinematics: {k:?}, want rigid or report")),
                 }
             }
+            "--ideal" => a.cfg.realism = Realism::IDEAL,
+            "--body" => {
+                a.cfg.realism.whole_body = match value("--body")?.as_str() {
+                    "whole" => true,
+                    "wheels" => false,
+                    b => return Err(format!("--body: {b:?}, want whole or wheels")),
+                }
+            }
+            "--speed-spread" => a.cfg.realism.speed_spread = [num(&value("--speed-spread")?, "--speed-spread")?; 4],
+            "--pivot" => {
+                let v = value("--pivot")?;
+                let (m, sd) = v.split_once(',').ok_or("--pivot wants MM,SD")?;
+                a.cfg.realism.pivot_behind_mm = num(m, "--pivot")?;
+                a.cfg.realism.pivot_spread_mm = num(sd, "--pivot")?;
+            }
+            "--cone" => a.cfg.realism.cone_deg = num(&value("--cone")?, "--cone")?,
+            "--glancing" => a.cfg.realism.glancing_deg = num(&value("--glancing")?, "--glancing")?,
+            "--compass-disturbance" => {
+                a.cfg.realism.compass_disturbance_deg = num(&value("--compass-disturbance")?, "--compass-disturbance")?
+            }
             "--out" => a.out = value("--out")?,
             "--quiet" => a.quiet = true,
             "--print-script" => a.print_script = true,
@@ -101,7 +129,7 @@ fn parse_args() -> Result<Option<Args>, String> {
 
 fn usage() -> String {
     let doc = include_str!("simulate.rs");
-    doc.lines().skip(5).take(11).map(|l| l.trim_start_matches("//! ")).collect::<Vec<_>>().join("\n")
+    doc.lines().skip(5).take(18).map(|l| l.trim_start_matches("//! ")).collect::<Vec<_>>().join("\n")
 }
 
 fn main() -> ExitCode {

@@ -103,19 +103,34 @@ pub mod servo {
 pub mod lidar {
     use crate::model::lidar::LidarModel;
 
-    /// Readings below this are inside the car (both lines give < 0 there).
-    pub const MIN_READING_MM: u16 = 20;
+    /// The closest distance from the reference point a reading may mean,
+    /// mm; a reading below it is "too close", not a measurement. The
+    /// reference point is on the car, inside the box, and both lidars look
+    /// across it (front: from 50 mm behind it, right: from 53 mm to its
+    /// left; `geometry`), so a wall cannot be nearer than 0 mm along the
+    /// beam; -6 mm leaves three lidar sigmas (`estimator::LIDAR_SIGMA`) for
+    /// noise: the lab's readings of a target at 0 mm go down to -5.3 mm
+    /// (data `lidar_*.csv`). This takes readings below 52 (front) and 66
+    /// (right) as too close; the right lidar pushed past a wall read 43-55,
+    /// which the former bound (20) turned into -16..-28 mm and the
+    /// estimator accepted.
+    pub const MIN_DISTANCE_MM: f64 = -6.0;
     /// Readings past this are beyond the VL53L0X's reliable range in its
     /// default mode (1.2 m, datasheet): reported as no target.
     pub const MAX_READING_MM: u16 = 1200;
     /// Front: `distance = 0.9849 reading - 56.2563` (report 3.3: the reading
     /// fitted on the true distance, inverted; `cargo run --example fit --
     /// tests/data/lab1/lidar_front.csv` gives 0.9849 / -56.2555 from the data).
-    pub const FRONT: LidarModel = LidarModel::new(0.9849, -56.2563, MIN_READING_MM, MAX_READING_MM);
+    pub const FRONT: LidarModel = LidarModel::new(0.9849, -56.2563, MIN_DISTANCE_MM, MAX_READING_MM);
     /// Right: `distance = 0.9867 reading - 70.4578` (report 3.3; the fit
     /// gives 0.9867 / -70.4605).
-    pub const RIGHT: LidarModel = LidarModel::new(0.9867, -70.4578, MIN_READING_MM, MAX_READING_MM);
+    pub const RIGHT: LidarModel = LidarModel::new(0.9867, -70.4578, MIN_DISTANCE_MM, MAX_READING_MM);
 
+    /// The VL53L0X's field of view, full cone angle, degrees (ST's
+    /// datasheet: 25 degrees): it reads the nearest surface in the cone, so
+    /// the estimator's measurement model takes the cone's direction nearest
+    /// a wall's normal (`model::measurement`).
+    pub const CONE_DEG: f64 = 25.0;
     /// Measurement timing budget, us (VL53L0X default 33 ms; at most one
     /// reading per 33 ms per lidar).
     pub const TIMING_BUDGET_US: u32 = 33_000;
@@ -376,6 +391,13 @@ pub mod estimator {
     /// The same for turns, degrees of turning (one 90-degree turn: the
     /// drives the estimator is tested on turn by quarter turns).
     pub const TURN_CORRELATION_DEG: f64 = 90.0;
+    /// A turn in place does not pivot exactly about the axle: the paper skid
+    /// drags (PAPERBOT) and moves the pivot by this much, one sigma, mm. The
+    /// estimator adds it as position noise across the car per angle turned
+    /// (a random walk over `TURN_CORRELATION_DEG`), so after a turn it
+    /// follows the lidars instead of gating them out. The simulator's pivot
+    /// (`sim::PIVOT_BEHIND_AXLE_MM` and its spread) lies within it.
+    pub const PIVOT_SIGMA_MM: f64 = 12.0;
     /// Extra position noise always added, mm^2 per second: keeps the
     /// covariance a margin away from singular (a turn's noise is rank one)
     /// and from collapsing while the robot stands still; 0.7 mm after a
@@ -392,9 +414,17 @@ pub mod estimator {
     /// are not used (the VL53L0X's 25-degree cone makes oblique readings
     /// short; the linearisation also degrades), degrees.
     pub const MAX_INCIDENCE_DEG: f64 = 60.0;
-    /// Lidar readings whose ray passes closer than this to a corner are not
-    /// used (which wall the beam meets is uncertain), mm.
-    pub const CORNER_MARGIN: Length = Length::from_mm_f64(25.0);
+    /// Lidar readings whose cone meets two walls at ranges closer than this
+    /// are not used (which wall the reading came from is uncertain), mm. A
+    /// side wall met at the cone's edge moves its nearest point by about
+    /// 30 mm per degree of heading at the box's distances (160 mm from the
+    /// wall, 17 degrees off its line), so a one-degree heading error can pick
+    /// the wrong wall inside 30 mm; at 25 mm the realistic simulator's
+    /// hour took such readings during turns and jumped 24 mm for a
+    /// fifth of a second (tests/realistic_hour.rs: worst 30.7 mm over 20 seeds; at
+    /// 35 mm, 25.1 mm). Larger is not better: at 50 mm the real drive
+    /// (tests/lab2_drive.rs) loses readings it needs and jumps 60 mm.
+    pub const CORNER_MARGIN: Length = Length::from_mm_f64(35.0);
     /// Initial position uncertainty (one sigma), mm: the robot is put down by
     /// hand near its start pose.
     pub const INITIAL_SIGMA_MM: f64 = 100.0;
@@ -426,6 +456,39 @@ pub mod estimator {
     pub const ARENA_MARGIN: Length = Length::from_mm_f64(50.0);
 }
 
+/// Localization (`model::locate`): where in the box the robot is, searched
+/// at power-up and on `locate` from the compass and the two lidars.
+pub mod locate {
+    /// Grid step of the search, mm: 15,000 points in the team's box, each
+    /// two lidar models (about 0.2 s on the lx106, lx106/BENCHMARKS.md).
+    pub const GRID_MM: i32 = 5;
+    /// A grid point explains a reading within this, mm: three lidar sigmas
+    /// (`estimator::LIDAR_SIGMA`: 6 mm), half the grid's diagonal (3.5 mm),
+    /// and what the compass's spread (2.5 degrees, `estimator::
+    /// COMPASS_SIGMA_DEG`) moves an oblique beam's reading at typical
+    /// ranges (a few mm).
+    pub const TOLERANCE_MM: f64 = 12.0;
+    /// Points that explain the readings spread over more than this on an
+    /// axis: the fix is ambiguous (reported as such), mm. Two tolerances
+    /// and a grid step over the span of one point's neighbourhood.
+    pub const AMBIGUOUS_SPAN_MM: i32 = 60;
+    /// When nothing fits at the compass's heading, the search tries headings
+    /// this far apart, degrees (the compass's 2.5-degree spread, `estimator::
+    /// COMPASS_SIGMA_DEG`) ...
+    pub const HEADING_STEP_DEG: f64 = 2.5;
+    /// ... up to this many each way (30 degrees: the real drive's compass,
+    /// `tests/data/lab2/drive1.csv`, is fitted by no pose within 10 degrees
+    /// of its first reading; the box is only roughly aligned with north).
+    pub const HEADING_STEPS: u8 = 12;
+    /// Readings averaged before the search, per lidar: five lidar periods
+    /// (0.17 s) take the lidar's 1.6 mm spread below 1 mm.
+    pub const LIDAR_READINGS: u8 = 5;
+    /// Compass readings averaged: 0.2 s at 100 Hz; the compass's spread
+    /// against the truth is mostly per heading, not per reading, so more
+    /// would not help (data `magnetometer_heading.csv`).
+    pub const COMPASS_READINGS: u8 = 20;
+}
+
 /// The simulated robot (`sim`, host only; f64 is fine: nothing here reaches
 /// the robot). Noise levels from the lab's data where it has them.
 pub mod sim {
@@ -448,14 +511,49 @@ pub mod sim {
     pub const FIELD_HORIZONTAL_COUNTS: f64 = 160.0;
     /// Vertical (down) earth field, counts: about 38 uT at UCLA (NOAA WMM).
     pub const FIELD_DOWN_COUNTS: f64 = 253.0;
-    /// Where the default run starts, mm and degrees: a lap around the box
-    /// (see `sim::script::DEFAULT`) from its south-west quarter.
-    pub const START_X_MM: f64 = 180.0;
-    pub const START_Y_MM: f64 = 130.0;
+    /// Where the default run starts, mm and degrees: the first corner of
+    /// the built-in laps (`sim::script::default_script`), 170 mm from the
+    /// south and west walls, where the front lidar's cone meets the wall
+    /// ahead before the side wall.
+    pub const START_X_MM: f64 = 170.0;
+    pub const START_Y_MM: f64 = 170.0;
     pub const START_HEADING_DEG: f64 = 0.0;
     /// Half the car's width at the wheels, mm (the 85 mm axle): a wheel
     /// that would pass a wall is a collision.
     pub const HALF_TRACK_MM: f64 = 42.5;
+
+    // The realistic simulator's effects (`sim::realism`; each an option of
+    // `simulate`).
+
+    /// Trial-to-trial spread of the speed, one sigma, fraction, per motion
+    /// (forward, backward, clockwise, counter-clockwise): each motion runs at
+    /// its line's speed times one factor drawn for it. Data `servo_runs.csv`:
+    /// the rms over the five command pairs of the ten timed runs' relative
+    /// spread, 1.9 %, 2.5 %, 2.6 %, 1.1 %.
+    pub const SPEED_SPREAD: [f64; 4] = [0.019, 0.025, 0.026, 0.011];
+    /// A turn in place pivots about a point this far behind the axle's
+    /// midpoint on average, mm: the paper skid drags ~70 mm behind the axle
+    /// (PAPERBOT) and holds the tail back. Not measured (the lab timed turns
+    /// only); 10 mm, a seventh of the way to the skid, is an assumption.
+    pub const PIVOT_BEHIND_AXLE_MM: f64 = 10.0;
+    /// Spread of that point from turn to turn, one sigma, mm (assumed, as
+    /// the mean: the skid's grip changes with the paper and the floor).
+    pub const PIVOT_SPREAD_MM: f64 = 5.0;
+    /// The lidar's cone, full angle, degrees: the sensor's (`lidar::CONE_DEG`).
+    pub const LIDAR_CONE_DEG: f64 = super::lidar::CONE_DEG;
+    /// Readings start failing past this incidence of the beam's axis on the
+    /// wall, degrees, all fail at 90 (the lab 2 README: glancing readings
+    /// fail; the lab measured square on only, so the onset is assumed).
+    pub const GLANCING_DEG: f64 = 60.0;
+    /// Of the failed readings, the share that is a spurious echo (0.3 to 1.5
+    /// times the true distance) rather than "no target" (assumed).
+    pub const SPURIOUS_SHARE: f64 = 0.3;
+    /// Compass disturbance: amplitude of the heading error that varies over
+    /// the floor, degrees (assumed: within the lab's 2.5-degree spread
+    /// against a printed compass, data `magnetometer_heading.csv`).
+    pub const COMPASS_DISTURBANCE_DEG: f64 = 2.0;
+    /// Wavelength of that pattern over the floor, mm (about the box's length).
+    pub const COMPASS_DISTURBANCE_WAVELENGTH_MM: f64 = 800.0;
 }
 
 /// The teleop tool (`examples/teleop.rs`, `host::teleop`; host only).

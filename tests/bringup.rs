@@ -63,7 +63,7 @@ fn readings_go_through_the_lidar_models() {
             match s.range {
                 Range::Target(d) => assert!((d.to_mm_f64() - (slope * f64::from(mm) + icpt)).abs() < 0.01),
                 Range::NoTarget => assert!(mm > config::lidar::MAX_READING_MM),
-                Range::TooClose => assert!(mm < config::lidar::MIN_READING_MM),
+                Range::TooClose => assert!(slope * f64::from(mm) + icpt < config::lidar::MIN_DISTANCE_MM),
             }
         }
         // Read once: the next one waits for the next period.

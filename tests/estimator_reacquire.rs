@@ -41,9 +41,11 @@ fn heading_error_deg(est: &Estimator, truth: Angle) -> f64 {
     f64::from(truth.diff(est.pose().theta)) * 360.0 / 4_294_967_296.0
 }
 
+// (at 10 degrees both lidars read square enough to fix both axes; at 30 the
+// cones of both meet the east wall first and x is not observable)
 #[test]
 fn a_run_of_compass_outliers_wins_and_shorter_runs_do_not() {
-    let start = Pose::from_mm(380, 250, deg(30.0));
+    let start = Pose::from_mm(380, 250, deg(10.0));
     // (heading the compass insists on, degrees from the estimate)
     for off in [25.0, 41.0, 90.0, 179.0, -60.0] {
         let truth = start.theta.wrapping_add(deg(off));

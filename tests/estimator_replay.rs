@@ -51,7 +51,7 @@ fn replay_reproduces_the_estimator_bit_for_bit_and_tracks_the_truth() {
     let res = run(&sample_scenario(), |_, _, _| {});
     let samples = replay::parse(&std::fs::read_to_string(SAMPLE).unwrap()).unwrap();
     assert_eq!(samples.len(), res.log.len());
-    let (est, stats) = replay::replay(&samples, res.start, Arena::DEFAULT);
+    let (est, stats) = replay::replay(&samples, replay::Start::Pose(res.start), Arena::DEFAULT);
     // row k + 1 of the replay is the estimate after tick k of the run
     for (k, pose) in res.poses.iter().enumerate().take(res.poses.len() - 1) {
         assert_eq!(est[k + 1].pose, *pose, "row {}", k + 1);
@@ -122,7 +122,7 @@ fn stopped_robot_stays_put_and_readings_pull_it_to_the_truth() {
         log += &format!("{},90,90,{fr},{rr},0\n", k * 10);
     }
     let start = TruePose { x: 220.0, y: 130.0, th: 5f64.to_radians() }.to_pose();
-    let (est, _) = replay::replay(&replay::parse(&log).unwrap(), start, Arena::DEFAULT);
+    let (est, _) = replay::replay(&replay::parse(&log).unwrap(), replay::Start::Pose(start), Arena::DEFAULT);
     let last = est.last().unwrap().pose;
     // the readings are rounded to whole mm: the model maps them within ~1 mm
     assert!((last.x.to_mm_f64() - 200.0).abs() < 1.5, "{}", last.x.to_mm_f64());

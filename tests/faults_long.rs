@@ -109,11 +109,12 @@ struct Report {
     secs: f64,
 }
 
-/// Readings each sensor has delivered to the estimator so far (front,
-/// right, compass; in the box a lidar always sees a wall).
-fn delivered(robot: &SimRobot) -> [u32; 3] {
-    let st = robot.controller().estimator().stats();
-    [st.front.total(), st.right.total(), st.compass.total()]
+/// When each sensor (front, right, compass) last delivered a sample, loop
+/// clock us: any sample, "too close" and "no target" included (a lidar
+/// against a wall delivers samples the estimator does not take).
+fn last_samples(robot: &SimRobot) -> [u32; 3] {
+    let c = robot.controller();
+    [c.front_health(), c.right_health(), c.compass_health()].map(|h| h.last_sample_us())
 }
 
 fn run(r: Run) -> Report {
@@ -125,9 +126,8 @@ fn run(r: Run) -> Report {
     let mut next_command = 0u64;
     let mut outage: Option<(Outage, u64)> = None; // and the tick it ends
     let mut next_outage = range(&mut rng, 1_000, 5_000) as u64;
-    // (end of the last outage in ticks, sample counts of the three sensors then)
-    // (end of the last outage in ticks, readings delivered then, which
-    // sensors have been back up and delivered since)
+    // (end of the last outage in ticks, the sensors' last sample times
+    // then, which sensors have been back up and delivered since)
     let mut recovering: Option<(u64, [u32; 3], [bool; 3])> = None;
     let (mut worst_recovery, mut recoveries) = (0u64, 0u64);
     let mut up_ticks = [0u64; 3];
@@ -166,7 +166,7 @@ fn run(r: Run) -> Report {
                 o.set(&robot, false);
                 outage = None;
                 next_outage = i + range(&mut rng, 10 * per_s, 50 * per_s) as u64;
-                recovering = Some((i, delivered(&robot), [false; 3]));
+                recovering = Some((i, last_samples(&robot), [false; 3]));
                 if r.recovery_limit_s.is_some() {
                     next_outage = u64::MAX; // scheduled once recovered
                 }
@@ -215,11 +215,11 @@ fn run(r: Run) -> Report {
         // since the outage ended (not necessarily all at the same moment:
         // on a faulty bus a sensor can go down again at the next glitch)
         if let Some((since, before, mut back)) = recovering {
-            let now = delivered(&robot);
+            let now = last_samples(&robot);
             let c = robot.controller();
             let up = [c.front_health().up, c.right_health().up, c.compass_health().up];
             for k in 0..3 {
-                back[k] |= up[k] && now[k] > before[k];
+                back[k] |= up[k] && now[k] != before[k];
             }
             recovering = Some((since, before, back));
             if back.iter().all(|b| *b) {

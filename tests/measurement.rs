@@ -77,9 +77,11 @@ fn normal_miss_is_positive_for_long_readings_and_scaled_by_the_incidence() {
     let beam = Beam::new(&arena, &pose, &FRONT_LIDAR);
     assert_eq!(beam.wall, Wall::North);
     let expected = beam.expected_distance().unwrap();
-    assert!((expected.to_mm_f64() - 300.0 / f64::cos(f64::to_radians(30.0))).abs() < 0.001);
-    let cos30 = f64::cos(f64::to_radians(30.0));
-    for (dz, want) in [(0.0, 0.0), (10.0, 10.0 * cos30), (-10.0, -10.0 * cos30)] {
+    // the lidar sits 50 mm behind the reference point; the nearest point in
+    // its cone is 30 - 12.5 degrees off square
+    let (cos30, cone) = (f64::cos(f64::to_radians(30.0)), f64::cos(f64::to_radians(17.5)));
+    assert!((expected.to_mm_f64() - ((300.0 + 50.0 * cos30) / cone - 50.0)).abs() < 0.001);
+    for (dz, want) in [(0.0, 0.0), (10.0, 10.0 * cone), (-10.0, -10.0 * cone)] {
         let z = Length::from_mm_f64(expected.to_mm_f64() + dz);
         assert!((beam.normal_miss(z).to_mm_f64() - want).abs() < 0.001, "{dz}");
     }
@@ -92,8 +94,9 @@ fn corner_test_and_incidence_limit() {
     let at_corner = TruePose { x: LX - 200.0, y: WY - 200.0, th: f64::to_radians(45.0) }.to_pose();
     let b = Beam::new(&arena, &at_corner, &FRONT_LIDAR);
     assert!(b.near_corner(Length::from_mm(25)));
-    // 5 degrees off the corner: the ray lengths differ by about 50 mm
-    let off = TruePose { x: LX - 200.0, y: WY - 200.0, th: f64::to_radians(40.0) }.to_pose();
+    // 10 degrees off the corner: the nearest points in the cone on the two
+    // walls are about 50 mm apart
+    let off = TruePose { x: LX - 200.0, y: WY - 200.0, th: f64::to_radians(35.0) }.to_pose();
     let b = Beam::new(&arena, &off, &FRONT_LIDAR);
     assert!(!b.near_corner(Length::from_mm(25)) && b.near_corner(Length::from_mm(60)));
     assert_eq!(b.wall, Wall::North);

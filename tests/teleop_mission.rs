@@ -55,9 +55,9 @@ impl Write for SimPort {
 
 const FILE: &str = "\
 # a square's three sides
-pose 180 130 0      # put down here
+pose 170 170 0      # put down here
 wait 1.5            # the estimate settles
-goto 500 150
+goto 500 170
 face 90
 goto 500 330
 back 0.13 0.5
@@ -67,9 +67,9 @@ goto 220 330
 #[test]
 fn a_mission_file_is_uploaded_started_run_unplugged_and_its_log_downloaded() {
     let steps = parse_mission_file(FILE).unwrap();
-    assert_eq!(steps[0], "mission add pose 180 130 0.000");
+    assert_eq!(steps[0], "mission add pose 170 170 0.000");
     assert_eq!(steps[5], "mission add back 0.130 0.500");
-    let cfg = SimConfig { start: PoseF64::new(180.0, 130.0, 0.0), seed: 9, ..SimConfig::default() };
+    let cfg = SimConfig { start: PoseF64::new(170.0, 170.0, 0.0), seed: 9, ..SimConfig::default() };
     let mut port = SimPort { robot: SimRobot::new(cfg), pending: VecDeque::new() };
     let mut shown = Vec::new();
     upload(&mut port, &steps, &mut shown).unwrap().unwrap();

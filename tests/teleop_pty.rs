@@ -172,7 +172,7 @@ fn line_mode_drives_the_simulated_robot_over_a_pty_and_records_a_replayable_log(
     let start = start.expect("a start pose");
     let v: Vec<f64> = start.split(',').map(|x| x.parse().unwrap()).collect();
     let pose = Pose::new(Coord::from_mm_f64(v[0]), Coord::from_mm_f64(v[1]), Angle::from_degrees_f64(v[2]));
-    let (est, _) = replay::replay(&samples, pose, Arena::DEFAULT);
+    let (est, _) = replay::replay(&samples, replay::Start::Pose(pose), Arena::DEFAULT);
     let replayed = PoseF64::from_pose(&est.last().unwrap().pose);
     let reported = out
         .lines()

@@ -104,7 +104,7 @@ fn arena_and_start_outside_it_are_refused_clearly() {
         ("simulate", &["--arena", "0x0"][..], "--arena 0x0: each side must be 1..30000 mm"),
         ("simulate", &["--arena", "800"][..], "--arena wants LxW"),
         ("simulate", &["--start", "900,100,0"][..], "outside the 762.5 x 495 mm arena"),
-        ("simulate", &["--arena", "100x100"][..], "default start (180, 130) mm is outside"),
+        ("simulate", &["--arena", "100x100"][..], "default start (170, 170) mm is outside"),
         ("replay", &["log.csv", "--arena", "0x0"][..], "--arena 0x0: each side must be 1..30000 mm"),
         ("replay", &["log.csv", "--start", "100,-5,0"][..], "outside the 762.5 x 495 mm arena"),
         ("sim_pty", &["--start", "100,600,0"][..], "outside the 762.5 x 495 mm arena"),

@@ -58,11 +58,11 @@ fn heading_miss(r: &SimRobot, deg: f64) -> f64 {
 #[test]
 fn a_square_of_gotos_ends_within_20_mm_of_each_corner() {
     for seed in 1..=4 {
-        let mut r = robot(180.0, 130.0, 0.0, seed);
+        let mut r = robot(170.0, 170.0, 0.0, seed);
         ticks(&mut r, 2.0); // the estimate settles on the lidars and the compass
         let mut worst: f64 = 0.0;
         for _lap in 0..2 {
-            for (x, y) in [(550.0, 150.0), (550.0, 350.0), (200.0, 350.0), (200.0, 150.0)] {
+            for (x, y) in [(550.0, 170.0), (550.0, 325.0), (200.0, 325.0), (200.0, 170.0)] {
                 r.send(&format!("goto {x} {y}"));
                 let lines = run_until(&mut r, &["# done", "# err"], 30);
                 assert!(lines.iter().any(|l| l.starts_with("# done at")), "seed {seed} goto {x} {y}: {lines:?}");
@@ -168,11 +168,11 @@ fn upload(r: &mut SimRobot, steps: &[&str]) {
 }
 
 const SQUARE: &[&str] =
-    &["goto 550 150", "face 90", "wait 0.5", "goto 550 350", "goto 200 350", "fwd 0.13 0.5", "goto 200 150"];
+    &["goto 550 170", "face 90", "wait 0.5", "goto 550 325", "goto 200 325", "fwd 0.13 0.5", "goto 200 170"];
 
 #[test]
 fn a_mission_runs_with_the_cable_pulled_and_its_log_dumps_as_telemetry() {
-    let mut r = robot(180.0, 130.0, 0.0, 11);
+    let mut r = robot(170.0, 170.0, 0.0, 11);
     upload(&mut r, SQUARE);
     r.send("log 10");
     r.send("mission start");
@@ -184,7 +184,7 @@ fn a_mission_runs_with_the_cable_pulled_and_its_log_dumps_as_telemetry() {
     assert!(done.is_some(), "{lines:?}");
     assert!(!lines.iter().any(|l| l.contains("deadman")), "{lines:?}");
     assert_eq!(lines.iter().filter(|l| l.starts_with("# done at")).count(), 5, "{lines:?}");
-    assert!(miss(&r, 200.0, 150.0) <= 20.0, "ended {:?}", r.truth());
+    assert!(miss(&r, 200.0, 170.0) <= 20.0, "ended {:?}", r.truth());
     assert_eq!(r.collisions(), 0);
     let seconds: f64 = done.unwrap()["# mission done in ".len()..].split(' ').next().unwrap().parse().unwrap();
     println!("mission: {seconds} s after a {countdown_s} s countdown");
@@ -203,7 +203,7 @@ fn a_mission_runs_with_the_cable_pulled_and_its_log_dumps_as_telemetry() {
     assert!(rows.windows(2).all(|w| w[1].t_ms == w[0].t_ms + 100), "10 Hz, none missing");
     assert!(rows.iter().any(|r| r.front_raw_mm.is_some()) && rows.iter().any(|r| r.compass_mdeg.is_some()));
     let last = rows.last().unwrap();
-    assert!((f64::from(last.x_dmm) / 10.0 - 200.0).abs() < 20.0 && (f64::from(last.y_dmm) / 10.0 - 150.0).abs() < 20.0);
+    assert!((f64::from(last.x_dmm) / 10.0 - 200.0).abs() < 20.0 && (f64::from(last.y_dmm) / 10.0 - 170.0).abs() < 20.0);
 }
 
 #[test]
@@ -232,7 +232,7 @@ fn log_dropped(r: &SimRobot) -> u32 {
 
 #[test]
 fn any_byte_aborts_a_running_mission_and_a_command_cancels_the_countdown() {
-    let mut r = robot(180.0, 130.0, 0.0, 4);
+    let mut r = robot(170.0, 170.0, 0.0, 4);
     upload(&mut r, &["fwd 0.13 3", "cw 2.4 1"]);
     r.send("mission start");
     ticks(&mut r, 2.0);
@@ -258,7 +258,7 @@ fn any_byte_aborts_a_running_mission_and_a_command_cancels_the_countdown() {
 #[test]
 fn a_mission_survives_a_reset_through_the_store_and_a_fresh_one_starts_empty() {
     let mut store = MemoryStore::default();
-    let mut r = robot(180.0, 130.0, 0.0, 1);
+    let mut r = robot(170.0, 170.0, 0.0, 1);
     upload(&mut r, SQUARE);
     // what the firmware does after each pass of its loop
     if r.controller_mut().take_mission_changed() {
@@ -268,7 +268,7 @@ fn a_mission_survives_a_reset_through_the_store_and_a_fresh_one_starts_empty() {
     let before = r.controller().mission().clone();
 
     // a reset: a new loop, the mission read back at boot
-    let mut r = robot(180.0, 130.0, 0.0, 1);
+    let mut r = robot(170.0, 170.0, 0.0, 1);
     assert!(r.controller().mission().is_empty());
     let restored = Mission::decode(&store.load()).expect("the stored mission");
     assert_eq!(restored, before);
@@ -276,7 +276,7 @@ fn a_mission_survives_a_reset_through_the_store_and_a_fresh_one_starts_empty() {
     r.send("mission list");
     let lines = r.take_output();
     assert_eq!(lines.len(), SQUARE.len() + 2);
-    assert_eq!(lines[1], "# mission 1: goto 550 150");
+    assert_eq!(lines[1], "# mission 1: goto 550 170");
     assert_eq!(lines[2], "# mission 2: face 90.000");
     assert_eq!(lines.last().unwrap(), &format!("# mission: {} steps", SQUARE.len()));
 

@@ -38,6 +38,17 @@ pub use trig::{atan2, sin_cos};
 
 /// Rounds an `f64` to the nearest `i64` in a `const fn` (`f64::round` is not
 /// const on Rust 1.82).
+/// cos(x) for |x| <= pi, by its series (const: for the config's angles).
+pub const fn cos_f64(x: f64) -> f64 {
+    let (mut term, mut sum, mut k) = (1.0, 1.0, 1);
+    while k < 20 {
+        term = -term * x * x / ((2 * k - 1) as f64 * (2 * k) as f64);
+        sum += term;
+        k += 1;
+    }
+    sum
+}
+
 pub const fn round_f64(x: f64) -> i64 {
     if x >= 0.0 {
         (x + 0.5) as i64

@@ -255,7 +255,7 @@ fn lidar_constants(text: &str, path: &str) -> Result<String, String> {
     let name = if path.contains("right") { "RIGHT" } else { "FRONT" };
     Ok(std::format!(
         "// distance = {:.4} * reading {:+.4} mm, {} readings (reading on distance, inverted), R^2 {:.5}\n\
-         pub const {name}: LidarModel = LidarModel::new({:.4}, {:.4}, MIN_READING_MM, MAX_READING_MM);\n",
+         pub const {name}: LidarModel = LidarModel::new({:.4}, {:.4}, MIN_DISTANCE_MM, MAX_READING_MM);\n",
         f.slope,
         f.intercept,
         rows.len(),

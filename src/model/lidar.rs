@@ -23,7 +23,8 @@ pub struct LidarModel {
     pub slope_q16: i32,
     /// Intercept in mm.
     pub intercept: Length,
-    /// Readings below this (mm) are inside the car: reported as too close.
+    /// Readings below this (mm) mean a distance closer than the mounting
+    /// allows (see [`LidarModel::new`]): reported as too close.
     pub min_reading_mm: u16,
     /// Readings above this (mm) are beyond reliable range: no target.
     pub max_reading_mm: u16,
@@ -36,7 +37,9 @@ pub enum Range {
     Target(Length),
     /// Nothing in range (8190/8191 from the chip, or past the valid window).
     NoTarget,
-    /// Closer than the model holds for (below the valid window).
+    /// Closer than the mounting allows (below the valid window): not a
+    /// measurement (a lidar whose beam starts behind the reference point
+    /// and meets a wall before it, or a target pressed against the car).
     TooClose,
 }
 
@@ -53,7 +56,22 @@ impl Range {
 pub const NO_TARGET_READING: u16 = 8190;
 
 impl LidarModel {
-    pub const fn new(slope: f64, intercept_mm: f64, min_reading_mm: u16, max_reading_mm: u16) -> LidarModel {
+    /// The line `distance = slope reading + intercept_mm`; readings whose
+    /// distance is below `min_distance_mm` are [`Range::TooClose`] (the
+    /// smallest reading kept is the first whose distance reaches it), those
+    /// above `max_reading_mm` [`Range::NoTarget`]. `slope` must be positive.
+    pub const fn new(slope: f64, intercept_mm: f64, min_distance_mm: f64, max_reading_mm: u16) -> LidarModel {
+        // the reading at min_distance, rounded up
+        let at = (min_distance_mm - intercept_mm) / slope;
+        let r = round_f64(at);
+        let r = if (r as f64) < at { r + 1 } else { r };
+        let min_reading_mm = if r < 0 {
+            0
+        } else if r > u16::MAX as i64 {
+            u16::MAX
+        } else {
+            r as u16
+        };
         LidarModel {
             slope_q16: sat_i32(round_f64(slope * 65536.0)),
             intercept: Length::from_mm_f64(intercept_mm),

@@ -9,6 +9,7 @@ pub mod estimator;
 #[allow(clippy::indexing_slicing)]
 pub mod fit;
 pub mod lidar;
+pub mod locate;
 pub mod measurement;
 pub mod state;
 

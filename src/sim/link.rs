@@ -150,6 +150,8 @@ pub struct EmulatedRobot {
     pub wire: Wire,
     truth: PoseF64,
     rng: Rng,
+    /// The compass disturbance's phase (per seed, as in the host simulator).
+    disturbance_phase: f64,
     next_step_ns: u64,
     pins: u32,
     /// Whether `pins` holds levels the board reported.
@@ -186,7 +188,8 @@ impl EmulatedRobot {
         sensors.front.borrow_mut().set_xshut(false);
         sensors.right.borrow_mut().set_xshut(false);
         let mut rng = Rng::new(cfg.seed);
-        set_truth(&sensors, &cfg, &cfg.start, &mut rng);
+        let disturbance_phase = rng.range_f64(0.0, core::f64::consts::TAU);
+        set_truth(&sensors, &cfg, &cfg.start, &mut rng, disturbance_phase);
         let s = cfg.start;
         let preamble = std::format!("pose {:.0} {:.0} {:.1}\n", s.x, s.y, s.theta.to_degrees().rem_euclid(360.0));
         EmulatedRobot {
@@ -195,6 +198,7 @@ impl EmulatedRobot {
             wire,
             truth: cfg.start,
             rng,
+            disturbance_phase,
             next_step_ns: NS_PER_TICK,
             pins: 0,
             pins_known: false,
@@ -284,13 +288,13 @@ impl EmulatedRobot {
         };
         let d = config::geometry::ROTATION_TO_REFERENCE.to_mm_f64();
         let next = advance(&self.truth, noisy, NS_PER_TICK as f64 * 1e-9, self.cfg.kinematics, d);
-        if body_fits(&self.cfg.arena, &next) {
+        if body_fits(&self.cfg.arena, &self.cfg.realism, &next) {
             self.truth = next;
         } else {
             self.collisions += 1;
         }
         self.truth_log.push((t, self.truth));
-        set_truth(&self.sensors, &self.cfg, &self.truth, &mut self.rng);
+        set_truth(&self.sensors, &self.cfg, &self.truth, &mut self.rng, self.disturbance_phase);
     }
 
     fn pins_changed(&mut self, t: u64, levels: u32) {

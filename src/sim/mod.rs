@@ -10,6 +10,7 @@ pub mod bus;
 pub mod link;
 pub mod mpu9250;
 pub mod noise;
+pub mod realism;
 pub mod robot;
 pub mod script;
 pub mod sensors;

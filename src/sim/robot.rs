@@ -1,19 +1,23 @@
 //! [`SimRobot`]: the firmware's control loop driving a simulated paperbot.
 //!
 //! Each [`SimRobot::tick`] (one loop period of simulated time):
-//! 1. the fake chips get the truth at this instant: each lidar's ray is cast
-//!    from its mount to the arena's walls, the distance from the reference
-//!    point along it gets Gaussian noise and becomes the chip's reading
-//!    through the inverse lidar model ([`LidarModel::reading_for`]); the
-//!    compass's earth field is turned into the car's frame at the true
-//!    magnetic heading (plus noise), then distorted by the inverse of the
-//!    configured hard/soft-iron calibration, so the driver's correction
-//!    undoes it;
+//! 1. the fake chips get the truth at this instant: each lidar reads the
+//!    nearest wall in its cone from its mount (a thin ray with the cone
+//!    off), readings at glancing incidence may fail
+//!    ([`super::realism`]); the distance from the reference point along
+//!    the beam gets Gaussian noise and becomes the chip's reading through
+//!    the inverse lidar model ([`LidarModel::reading_for`]); the compass's
+//!    earth field is turned into the car's frame at the true magnetic
+//!    heading (plus noise and the floor's disturbance), then distorted by
+//!    the inverse of the configured hard/soft-iron calibration, so the
+//!    driver's correction undoes it;
 //! 2. the control loop ticks: its drivers talk to the fake chips over the
 //!    simulated bus (register level), it reads, steps, acts, reports;
 //! 3. the body moves for one period by what its servo commands make by the
-//!    actuator model ([`ActuatorModel::motion_from_commands`](crate::model::actuator::ActuatorModel::motion_from_commands)), with
-//!    per-tick noise on the speed and turn rate.
+//!    actuator model ([`ActuatorModel::motion_from_commands`](crate::model::actuator::ActuatorModel::motion_from_commands)), times
+//!    the motion's trial factor, with per-tick noise on the speed and turn
+//!    rate; a turn pivots about the trial's point behind the axle; a
+//!    motion that would take the body through a wall is refused.
 //!
 //! Commands go in byte by byte ([`SimRobot::feed`]) and the loop's output
 //! lines come out of [`SimRobot::take_output`], so the same robot serves a
@@ -25,6 +29,7 @@ use std::vec::Vec;
 use super::arena::Arena;
 use super::body::{advance, Kinematics, MotionF64, PoseF64};
 use super::noise::Rng;
+use super::realism::{compass_disturbance, glancing_failure, lidar_range, Realism, Trial};
 use super::script::Script;
 use super::sensors::{SimCompass, SimLidar, SimSensors};
 use crate::config;
@@ -97,6 +102,9 @@ pub struct SimConfig {
     pub seed: u64,
     pub noise: Noise,
     pub kinematics: Kinematics,
+    /// The effects that make it as hard as the real robot (default: the
+    /// lab's, [`Realism::LAB`]).
+    pub realism: Realism,
 }
 
 impl Default for SimConfig {
@@ -111,6 +119,7 @@ impl Default for SimConfig {
             seed: 1,
             noise: Noise::default(),
             kinematics: Kinematics::default(),
+            realism: Realism::default(),
         }
     }
 }
@@ -150,6 +159,10 @@ pub struct SimRobot {
     /// Ticks whose motion was refused because a wheel or the nose would
     /// have passed a wall.
     collisions: u32,
+    /// The running motion's draw of speed factor and pivot.
+    trial: Trial,
+    /// The compass disturbance's phase (per seed).
+    disturbance_phase: f64,
 }
 
 impl SimRobot {
@@ -157,8 +170,9 @@ impl SimRobot {
         let sensors = SimSensors::new();
         let (mut front, mut right, mut compass) = sensors.drivers();
         let mut rng = Rng::new(cfg.seed);
+        let disturbance_phase = rng.range_f64(0.0, core::f64::consts::TAU);
         // the chips see the start pose during bring-up
-        set_truth(&sensors, &cfg, &cfg.start, &mut rng);
+        set_truth(&sensors, &cfg, &cfg.start, &mut rng, disturbance_phase);
         // bring-up results show in the loop's health: a chip that failed
         // here fails its first poll and is re-initialised by the loop
         let _ = crate::driver::lidar::bring_up(&mut front, &mut right);
@@ -178,7 +192,18 @@ impl SimRobot {
             RingLog::new(),
         );
         let next_tick_ns = sensors.clock.now_ns();
-        SimRobot { cfg, sensors, ctl, truth: cfg.start, rng, out: Collect::default(), next_tick_ns, collisions: 0 }
+        SimRobot {
+            cfg,
+            sensors,
+            ctl,
+            truth: cfg.start,
+            rng,
+            out: Collect::default(),
+            next_tick_ns,
+            collisions: 0,
+            trial: Trial::NONE,
+            disturbance_phase,
+        }
     }
 
     /// One received serial byte.
@@ -211,7 +236,7 @@ impl SimRobot {
         // clock past the schedule: then this tick is late, as on the robot
         let now_ns = clock.now_ns().max(self.next_tick_ns);
         clock.advance_ns(now_ns - clock.now_ns());
-        set_truth(&self.sensors, &self.cfg, &self.truth, &mut self.rng);
+        set_truth(&self.sensors, &self.cfg, &self.truth, &mut self.rng, self.disturbance_phase);
         // the loop's wrapping microsecond counter
         self.ctl.tick((now_ns / 1_000) as u32, &mut self.out);
         self.next_tick_ns = now_ns + u64::from(TICK_US) * 1_000;
@@ -219,12 +244,17 @@ impl SimRobot {
         let servos = *self.ctl.servos();
         let motion = config::actuators::MODEL.motion_from_commands(servos.left, servos.right);
         let dt_s = f64::from(TICK_US) * 1e-6;
-        let noisy = match MotionF64::from_motion(motion) {
+        let motion = MotionF64::from_motion(motion);
+        self.trial = self.trial.for_motion(motion, &self.cfg.realism, &mut self.rng);
+        let k = self.trial.speed_factor;
+        let noisy = match motion {
             MotionF64::Stop => MotionF64::Stop,
-            MotionF64::Straight(v) => MotionF64::Straight(v * (1.0 + self.rng.gauss(self.cfg.noise.speed))),
-            MotionF64::Turn(w) => MotionF64::Turn(w * (1.0 + self.rng.gauss(self.cfg.noise.turn))),
+            MotionF64::Straight(v) => MotionF64::Straight(v * k * (1.0 + self.rng.gauss(self.cfg.noise.speed))),
+            MotionF64::Turn(w) => MotionF64::Turn(w * k * (1.0 + self.rng.gauss(self.cfg.noise.turn))),
         };
-        let d = config::geometry::ROTATION_TO_REFERENCE.to_mm_f64();
+        // a turn pivots `pivot_behind_mm` behind the axle: the reference
+        // point circles it at D plus that
+        let d = config::geometry::ROTATION_TO_REFERENCE.to_mm_f64() + self.trial.pivot_behind_mm;
         let next = advance(&self.truth, noisy, dt_s, self.cfg.kinematics, d);
         if self.fits(&next) {
             self.truth = next;
@@ -236,7 +266,7 @@ impl SimRobot {
     }
 
     fn fits(&self, p: &PoseF64) -> bool {
-        body_fits(&self.cfg.arena, p)
+        body_fits(&self.cfg.arena, &self.cfg.realism, p)
     }
 
     /// Runs `script` (times from now) for `duration_us` of simulated time,
@@ -301,33 +331,53 @@ impl SimRobot {
     }
 }
 
-/// True when the nose (reference point) and both wheels are inside the arena.
-pub fn body_fits(a: &Arena, p: &PoseF64) -> bool {
+/// True when the nose (reference point) and both wheels are inside the
+/// arena, and with [`Realism::whole_body`] the skid and both lidars too.
+pub fn body_fits(a: &Arena, realism: &Realism, p: &PoseF64) -> bool {
     let d = config::geometry::ROTATION_TO_REFERENCE.to_mm_f64();
     let (s, c) = p.theta.sin_cos();
     let (ax, ay) = (p.x - d * c, p.y - d * s);
     let h = config::sim::HALF_TRACK_MM;
-    a.contains(p.x, p.y) && a.contains(ax - h * s, ay + h * c) && a.contains(ax + h * s, ay - h * c)
+    let wheels = a.contains(p.x, p.y) && a.contains(ax - h * s, ay + h * c) && a.contains(ax + h * s, ay - h * c);
+    if !realism.whole_body {
+        return wheels;
+    }
+    let skid = config::geometry::SKID_BEHIND_AXLE.to_mm_f64();
+    let lidar_in = |m: &LidarMount| {
+        let (x, y, _) = p.lidar_ray(m);
+        a.contains(x, y)
+    };
+    wheels
+        && a.contains(ax - skid * c, ay - skid * s)
+        && lidar_in(&config::geometry::FRONT_LIDAR)
+        && lidar_in(&config::geometry::RIGHT_LIDAR)
 }
 
 /// Sets the fake chips' truth for the body at `p`.
-pub fn set_truth(sensors: &SimSensors, cfg: &SimConfig, p: &PoseF64, rng: &mut Rng) {
+pub fn set_truth(sensors: &SimSensors, cfg: &SimConfig, p: &PoseF64, rng: &mut Rng, disturbance_phase: f64) {
+    let no_target = crate::model::lidar::NO_TARGET_READING;
     let lidar = |mount: &LidarMount, model: &LidarModel, rng: &mut Rng| -> u16 {
         let (x, y, dir) = p.lidar_ray(mount);
-        let Some(t) = cfg.arena.ray_cast(x, y, dir) else { return crate::model::lidar::NO_TARGET_READING };
+        let Some((t, incidence)) = lidar_range(&cfg.arena, x, y, dir, &cfg.realism) else { return no_target };
+        let t = match glancing_failure(incidence, &cfg.realism, rng) {
+            None => t,
+            Some(None) => return no_target,
+            Some(Some(factor)) => t * factor,
+        };
         // the model gives the distance from the reference point along the
-        // beam: the ray from the mount plus how far the mount sits ahead
+        // beam: the range from the mount plus how far the mount sits ahead
         // of the reference point along its own beam
         let (bs, bc) = mount.direction.to_radians_f64().sin_cos();
         let along = mount.forward.to_mm_f64() * bc + mount.right.to_mm_f64() * bs;
         let distance = t + along + rng.gauss(cfg.noise.lidar_mm);
-        model.reading_for(Length::from_mm_f64(distance)).unwrap_or(0).min(crate::model::lidar::NO_TARGET_READING)
+        model.reading_for(Length::from_mm_f64(distance)).unwrap_or(0).min(no_target)
     };
     let front = lidar(&config::geometry::FRONT_LIDAR, &config::lidar::FRONT, rng);
     let right = lidar(&config::geometry::RIGHT_LIDAR, &config::lidar::RIGHT, rng);
     sensors.front.borrow_mut().set_distance_mm(front);
     sensors.right.borrow_mut().set_distance_mm(right);
-    sensors.mpu.borrow_mut().ak.set_field_adjusted(field_for(p.theta, cfg.noise.compass_deg, rng));
+    let disturbed = p.theta + compass_disturbance(p.x, p.y, &cfg.realism, disturbance_phase);
+    sensors.mpu.borrow_mut().ak.set_field_adjusted(field_for(disturbed, cfg.noise.compass_deg, rng));
 }
 
 /// The ASA-adjusted counts (chip axes) the AK8963 reads at true heading

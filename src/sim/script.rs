@@ -98,40 +98,37 @@ impl Script {
     }
 }
 
-/// Forward speed of the default lap, m/s (inside the forward lines'
-/// measured range, 0.123..0.149 m/s).
-const LAP_SPEED: &str = "0.13";
-/// Clockwise quarter turn of the default lap: pi/2 / 0.63 s = 2.493 rad/s
-/// for 0.63 s, a whole number of 10 ms loop ticks.
-const QUARTER_TURN: (&str, u64) = ("cw 2.493 0.63", 630);
-/// The lap's legs, ms of driving north-south and east-west.
-const LONG_LEG_MS: u64 = 3000;
-const SHORT_LEG_MS: u64 = 1500;
-/// Stop between moves, ms.
-const PAUSE_MS: u64 = 250;
+/// The default lap's corners, mm (x north, y east), clockwise from the
+/// default start (config::sim): each at least 170 mm from every wall, so
+/// neither lidar's 25-degree cone grazes a side wall before the wall it
+/// faces (at 130 mm from a side wall the front cone meets it first).
+const LAP_CORNERS: [(i32, i32); 4] = [(590, 170), (590, 325), (170, 325), (170, 170)];
+/// Time given to each corner's `goto`, ms: a quarter turn (0.65 s at
+/// `config::goto::TURN_MRAD_S`) and the leg at 0.13 m/s (420 mm: 3.2 s;
+/// 155 mm: 1.2 s), with time to spare.
+const LEG_MS: [u64; 4] = [6_000, 4_000, 6_000, 4_000];
+/// Time the estimate has to settle on the lidars and the compass before
+/// the first `goto` (it refuses an uncertain estimate), ms.
+const SETTLE_MS: u64 = 2_000;
 
 /// The built-in script: from the default start (config::sim, heading
-/// north), laps clockwise around the default box, each 390 x 195 mm of
-/// driving with a quarter turn in place at each corner and a short stop
-/// after each move, for `duration_s` seconds. Telemetry at 10 Hz.
+/// north), laps clockwise around the default box by `goto` (steered by the
+/// estimate, so the realistic robot's speed spread and pivots do not drive
+/// it into a wall), 420 x 155 mm, for `duration_s` seconds. Telemetry at
+/// 10 Hz.
 pub fn default_script(duration_s: f64) -> String {
     let end_ms = (duration_s.max(0.0) * 1000.0) as u64;
     let mut s = String::new();
-    let _ = writeln!(s, "# built-in: laps clockwise around the default box (x north, y east)");
+    let _ = writeln!(s, "# built-in: laps clockwise around the default box by goto (x north, y east)");
     let _ = writeln!(s, "@0ms rate 10");
-    let mut t = 0u64;
+    let mut t = SETTLE_MS;
     'laps: loop {
-        for leg in [LONG_LEG_MS, SHORT_LEG_MS, LONG_LEG_MS, SHORT_LEG_MS] {
-            for (cmd, ms) in [
-                (format!("fwd {LAP_SPEED} {:.3}", leg as f64 / 1000.0), leg),
-                (QUARTER_TURN.0.to_string(), QUARTER_TURN.1),
-            ] {
-                if t >= end_ms {
-                    break 'laps;
-                }
-                let _ = writeln!(s, "@{t}ms {cmd}");
-                t += ms + PAUSE_MS;
+        for ((x, y), ms) in LAP_CORNERS.iter().zip(LEG_MS) {
+            if t + ms > end_ms {
+                break 'laps;
             }
+            let _ = writeln!(s, "@{t}ms goto {x} {y}");
+            t += ms;
         }
     }
     s

@@ -21,8 +21,22 @@ const LEGEND_ROW: f64 = 18.0;
 /// Length of the heading arrow at the end of a track, px (= mm).
 const ARROW: f64 = 40.0;
 
+/// One lidar reading drawn as a line from the lidar to where its beam ended
+/// (mm, x north, y east), with a dot at the end.
+#[derive(Clone, Copy, PartialEq, Debug)]
+pub struct Ray<'a> {
+    pub from: (f64, f64),
+    pub to: (f64, f64),
+    pub color: &'a str,
+}
+
 /// Renders the arena and the tracks as a standalone SVG document.
 pub fn render(arena: &Arena, tracks: &[Track<'_>], title: &str) -> String {
+    render_with_rays(arena, tracks, &[], title)
+}
+
+/// [`render`] with lidar readings drawn under the tracks.
+pub fn render_with_rays(arena: &Arena, tracks: &[Track<'_>], rays: &[Ray<'_>], title: &str) -> String {
     let legend_h = LEGEND_ROW * (tracks.len() as f64 + 1.0);
     let w = arena.width_y + 2.0 * MARGIN;
     let h = arena.length_x + 2.0 * MARGIN + legend_h;
@@ -47,6 +61,15 @@ pub fn render(arena: &Arena, tracks: &[Track<'_>], title: &str) -> String {
         arena.length_x,
         arena.width_y
     );
+    for r in rays {
+        let (x1, y1) = px(&PoseF64::new(r.from.0, r.from.1, 0.0));
+        let (x2, y2) = px(&PoseF64::new(r.to.0, r.to.1, 0.0));
+        let _ = writeln!(
+            s,
+            r#"<line x1="{x1:.1}" y1="{y1:.1}" x2="{x2:.1}" y2="{y2:.1}" stroke="{c}" stroke-width="0.5" stroke-opacity="0.5"/><circle cx="{x2:.1}" cy="{y2:.1}" r="2" fill="{c}"/>"#,
+            c = r.color
+        );
+    }
     for t in tracks {
         if t.poses.is_empty() {
             continue;

@@ -91,27 +91,22 @@ pub fn truth_step(p: TruePose, motion_kind: i8, v: f64, w: f64, drift: f64, dt: 
     }
 }
 
-/// f64 ray cast: the lidar model output (distance from the reference point
-/// along the beam) a perfect lidar at `mount` gives at `p`.
+/// What a lidar at `mount` reads at `p` in an `lx` x `wy` box, as the
+/// model output (distance from the reference point along the beam): the
+/// nearest wall point in the sensor's cone (`config::lidar::CONE_DEG`, f64,
+/// `sim::realism`) less the mount's setback.
 pub fn true_range(p: TruePose, mount: &LidarMount, lx: f64, wy: f64) -> f64 {
     let (f, r) = (mount.forward.to_mm_f64(), mount.right.to_mm_f64());
     let dir = mount.direction.to_radians_f64();
     let (s, c) = p.th.sin_cos();
     let mx = p.x + f * c - r * s;
     let my = p.y + f * s + r * c;
-    let phi = p.th + dir;
-    let (us, uc) = phi.sin_cos();
-    let mut t = f64::INFINITY;
-    if uc > 1e-12 {
-        t = t.min((lx - mx) / uc);
-    } else if uc < -1e-12 {
-        t = t.min(-mx / uc);
-    }
-    if us > 1e-12 {
-        t = t.min((wy - my) / us);
-    } else if us < -1e-12 {
-        t = t.min(-my / us);
-    }
+    let cone = paperbot::sim::realism::Realism {
+        cone_deg: paperbot::config::lidar::CONE_DEG,
+        ..paperbot::sim::realism::Realism::IDEAL
+    };
+    let arena = paperbot::sim::arena::Arena::new(lx, wy);
+    let t = paperbot::sim::realism::lidar_range(&arena, mx, my, p.th + dir, &cone).map_or(f64::INFINITY, |(t, _)| t);
     t + f * dir.cos() + r * dir.sin()
 }
 

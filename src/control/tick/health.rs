@@ -28,6 +28,12 @@ impl SensorHealth {
     pub(super) fn new() -> SensorHealth {
         SensorHealth { up: true, ..SensorHealth::default() }
     }
+
+    /// When the sensor last delivered a sample (any: "too close" and "no
+    /// target" too), loop clock us.
+    pub fn last_sample_us(&self) -> Stamp {
+        self.last_sample_us
+    }
 }
 
 /// Which sensor (for the shared fault handling).

@@ -7,12 +7,12 @@
 //!
 //! ```text
 //! # square.txt: '#' starts a comment, blank lines are ignored
-//! pose 180 130 0      # where the robot is put down
+//! pose 170 170 0      # where the robot is put down
 //! wait 1              # the estimate settles
-//! goto 550 150
+//! goto 550 170
 //! face 90
 //! fwd 0.13 1.5        # motions need a duration in a mission
-//! goto 200 150
+//! goto 200 170
 //! ```
 //!
 //! Every line is parsed here first (the robot's own parser) and must be a

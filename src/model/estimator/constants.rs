@@ -13,16 +13,7 @@ pub(super) const L: f64 = HEADING_LEVER_MM as f64;
 const fn to_i32(x: f64) -> i32 {
     crate::math::round_f64(x) as i32
 }
-/// cos(x) for |x| <= pi, by its series (const: for the config's angles).
-const fn cos_f64(x: f64) -> f64 {
-    let (mut term, mut sum, mut k) = (1.0, 1.0, 1);
-    while k < 20 {
-        term = -term * x * x / ((2 * k - 1) as f64 * (2 * k) as f64);
-        sum += term;
-        k += 1;
-    }
-    sum
-}
+use crate::math::cos_f64;
 
 /// Lidar variance, Q14 mm^2.
 pub(super) const R_LIDAR: i32 =
@@ -48,6 +39,16 @@ pub(super) const K_DRIFT: i32 = {
 pub(super) const K_TURN: i32 = {
     let lc = cfg::TURN_CORRELATION_DEG * TAU / 360.0;
     to_i32(cfg::TURN_SPREAD * cfg::TURN_SPREAD * lc * L * L * Q14 * TAU)
+};
+/// Turn: the position block's share, `K_TURN` plus the pivot's variance
+/// across the car (sigma_pivot^2 Lc_rad per radian, the same scaling) over
+/// `(D / L)^2`: the turn's noise vector `g` is `D / L` times the unit vector
+/// across the car, so one `v g g^T` adds both.
+pub(super) const K_TURN_POS: i32 = {
+    let lc = cfg::TURN_CORRELATION_DEG * TAU / 360.0;
+    let d_over_l = geometry::ROTATION_TO_REFERENCE.0 as f64 / 65536.0 / L;
+    let pivot = cfg::PIVOT_SIGMA_MM * cfg::PIVOT_SIGMA_MM * lc * Q14 * TAU;
+    to_i32(K_TURN as f64 + pivot / (d_over_l * d_over_l))
 };
 /// Floors per microsecond, Q14 mm^2 times 2^16.
 pub(super) const FLOOR_POS: u32 = crate::math::round_f64(cfg::POSITION_FLOOR_MM2_PER_S * Q14 / 1e6 * 65_536.0) as u32;
@@ -83,7 +84,7 @@ const _: () = {
     assert!(MIN_NORMAL > (1 << 28) && MIN_NORMAL <= (1 << 30));
     assert!(P_MIN > 0 && P_MIN < P_MAX && P_MAX <= (1 << 30));
     assert!(P0_POS <= P_MAX && P0_HEADING <= P_MAX);
-    assert!(K_DIST > 0 && K_DRIFT > 0 && K_TURN > 0);
+    assert!(K_DIST > 0 && K_DRIFT > 0 && K_TURN > 0 && K_TURN_POS >= K_TURN && K_TURN_POS < (1 << 30));
     // floor * dt must fit u32 for dt <= 65535 us
     assert!((FLOOR_POS as u64) * 65_535 < (1 << 32) && (FLOOR_HEADING as u64) * 65_535 < (1 << 32));
 };

@@ -58,9 +58,18 @@ impl Estimator {
 // tick bar: the quick test inline, the rare exact one out of line
 #[inline(always)]
 fn bound_correlation(pij: &mut i32, pii: i32, pjj: i32) -> u32 {
-    // |P_ij| <= min(P_ii, P_jj) implies P_ij^2 <= P_ii P_jj: the exact test
-    // (two 64-bit products) only past that.
-    if pij.unsigned_abs() <= pii.min(pjj).unsigned_abs() {
+    // |P_ij| <= min(P_ii, P_jj) implies P_ij^2 <= P_ii P_jj; so does the
+    // same in 32 bits on the top bits, |P_ij| rounded up and the diagonal
+    // down: a < (a / 2^15 + 1) 2^15. a <= 2^30 keeps that square below 2^31,
+    // the diagonal's product is below 2^32. The exact test (two 64-bit
+    // products) only past both: a correlation within about 2^-14 of 1.
+    let a = pij.unsigned_abs();
+    let (ii, jj) = (pii.unsigned_abs(), pjj.unsigned_abs());
+    if a <= ii.min(jj) {
+        return 0;
+    }
+    let up = (a >> 15) + 1;
+    if a <= 1 << 30 && up.wrapping_mul(up) <= (ii >> 15).wrapping_mul(jj >> 15) {
         return 0;
     }
     bound_correlation_exact(pij, pii, pjj)

@@ -129,7 +129,7 @@ use crate::config::estimator as cfg;
 use crate::math::{isqrt, Angle, Coord};
 use crate::model::measurement::Arena;
 use crate::model::state::Pose;
-use constants::{P0_HEADING, P0_POS};
+use constants::{P0_HEADING, P0_POS, P_MAX, R_COMPASS};
 
 pub use crate::model::measurement::LidarId;
 pub use covariance::Covariance;
@@ -273,6 +273,21 @@ impl Estimator {
         self.p = Self::initial_covariance();
         self.streaks = Streaks::default();
         self.keep_in_arena();
+    }
+
+    /// Forgets everything but the counts and starts at a localization's
+    /// fix ([`crate::model::locate`]): its pose, its position uncertainty
+    /// (uncorrelated), and the compass's for the heading.
+    pub fn start_at(&mut self, fix: &crate::model::locate::Fix) {
+        // sigma in mm Q16 -> variance Q14 mm^2: (s >> 8)^2 is Q16 mm^2, >> 2;
+        // capped at the largest variance kept
+        let var = |s: crate::math::Length| {
+            let q8 = i64::from(s.0 >> 8);
+            i32::try_from((q8 * q8) >> 2).unwrap_or(P_MAX).min(P_MAX)
+        };
+        self.reset(fix.pose);
+        self.p = Covariance { xx: var(fix.sigma_x), xy: 0, xt: 0, yy: var(fix.sigma_y), yt: 0, tt: R_COMPASS };
+        self.condition();
     }
 
     /// Keeps the position within [`cfg::ARENA_MARGIN`] of the arena, to the

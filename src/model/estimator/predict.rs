@@ -1,10 +1,10 @@
 //! The prediction: the pose moves by the state update, the covariance
 //! grows by the motion's noise.
 
-use super::constants::{D_OVER_L_Q31, FLOOR_HEADING, FLOOR_POS, K_DIST, K_DRIFT, K_TURN};
+use super::constants::{D_OVER_L_Q31, FLOOR_HEADING, FLOOR_POS, K_DIST, K_DRIFT, K_TURN, K_TURN_POS};
 use super::covariance::{add_noise, propagate};
 use super::Estimator;
-use crate::math::{mul_hi, Dt};
+use crate::math::{mul_hi, mul_q30_unsat, Dt};
 use crate::model::actuator::Motion;
 use crate::model::state::advance;
 
@@ -51,13 +51,17 @@ impl Estimator {
                 propagate(p, f1, f2);
                 // Q: the turned angle's noise enters through G = (-D s1 / L, D c1 / L, 1)
                 // (|g| < 2^28 in Q30); |turned| <= 2^31, K_TURN < 2^23: vt < 2^22.
+                // The position block also gets the pivot's own uncertainty
+                // (the skid drags), across the car like g: K_TURN_POS < 2^30
+                // (asserted), so vpos < 2^29.
                 let turned = self.pose.theta.diff(before).saturating_abs();
                 let vt = mul_hi(turned, K_TURN);
+                let vpos = mul_hi(turned, K_TURN_POS);
                 let g1 = -(mul_hi(D_OVER_L_Q31, s1) << 1);
                 let g2 = mul_hi(D_OVER_L_Q31, c1) << 1;
-                let (v1, v2) = add_noise(p, vt, g1, g2);
-                p.xt = p.xt.saturating_add(v1);
-                p.yt = p.yt.saturating_add(v2);
+                add_noise(p, vpos, g1, g2);
+                p.xt = p.xt.saturating_add(mul_q30_unsat(vt, g1));
+                p.yt = p.yt.saturating_add(mul_q30_unsat(vt, g2));
                 p.tt = p.tt.saturating_add(vt);
             }
         }

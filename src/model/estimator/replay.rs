@@ -25,6 +25,7 @@ use crate::config;
 use crate::math::{Angle, Dt};
 use crate::model::actuator::{Motion, ServoCmd};
 use crate::model::lidar::Range;
+use crate::model::locate::{locate, Fix, LocateError, Readings};
 use crate::model::measurement::{Arena, LidarId};
 use crate::model::state::Pose;
 
@@ -124,6 +125,15 @@ pub fn parse(text: &str) -> Result<Vec<Sample>, ReplayError> {
     Ok(out)
 }
 
+/// Where a replay starts.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub enum Start {
+    /// A typed pose (`--start`), with the config's initial uncertainty.
+    Pose(Pose),
+    /// A localization's fix and its uncertainty ([`locate_start`]).
+    Fix(Fix),
+}
+
 /// The estimate after one row.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
 pub struct Estimate {
@@ -131,10 +141,36 @@ pub struct Estimate {
     pub pose: Pose,
 }
 
-/// Runs the estimator over a log. Returns one estimate per row and the
-/// estimator's counts.
-pub fn replay(samples: &[Sample], start: Pose, arena: Arena) -> (Vec<Estimate>, EstimatorStats) {
-    let mut est = Estimator::with_arena(start, arena);
+/// Where the log starts, by the robot's own localization
+/// ([`crate::model::locate`]) from the first row with a compass heading and
+/// the lidar readings up to it (the newest of each).
+pub fn locate_start(samples: &[Sample], arena: Arena) -> Result<Fix, LocateError> {
+    let (mut front, mut right) = (None, None);
+    for s in samples {
+        let distance = |r: Option<u16>, m: &crate::model::LidarModel| r.and_then(|r| m.range(r).distance());
+        front = distance(s.front_mm, &config::lidar::FRONT).or(front);
+        right = distance(s.right_mm, &config::lidar::RIGHT).or(right);
+        if let Some(heading) = s.heading {
+            if front.is_some() || right.is_some() {
+                return locate(&arena, &Readings { heading, front, right });
+            }
+        }
+    }
+    Err(LocateError::NoReading)
+}
+
+/// Runs the estimator over a log from `start` (a typed pose, with the
+/// config's initial uncertainty, or a localization's fix). Returns one
+/// estimate per row and the estimator's counts.
+pub fn replay(samples: &[Sample], start: Start, arena: Arena) -> (Vec<Estimate>, EstimatorStats) {
+    let mut est = match start {
+        Start::Pose(p) => Estimator::with_arena(p, arena),
+        Start::Fix(f) => {
+            let mut e = Estimator::with_arena(f.pose, arena);
+            e.start_at(&f);
+            e
+        }
+    };
     let tick_us = 1_000_000 / config::timing::LOOP_HZ;
     let mut motion = Motion::Stop;
     let mut last_t: Option<u32> = None;

@@ -6,7 +6,10 @@ use super::constants::{GATE_SQ_Q8, LSB_PER_TILDE_MM_Q9, MIN_NORMAL, P_MAX, R_COM
 use super::covariance::{remove, Covariance};
 use super::{Estimator, SensorStats, Update};
 use crate::config::estimator as cfg;
-use crate::math::{mul_hi, mul_hi_u, mul_q30, mul_wide, normalize, reciprocal, shift, Angle, Coord};
+use crate::math::{mul_hi, mul_hi_u, mul_q30, mul_q30_unsat, mul_wide, normalize, reciprocal, shift, Angle, Coord};
+
+/// 1 in Q2.30.
+const ONE: i32 = 1 << 30;
 use crate::model::measurement::{Beam, LidarId, Wall};
 
 /// Whether [`Estimator::correct`] applies the innovation gate.
@@ -43,18 +46,13 @@ impl Estimator {
             // |z| < 2^11 mm keeps H's heading entry below 2^19 (Q16).
             let z = crate::math::Length(distance.0.clamp(-(1 << 27), 1 << 27));
             let nu = beam.normal_miss(z);
-            let (s, c) = (beam.sin, beam.cos);
-            // d(normal_miss)/d(state), see the module docs of `measurement`:
-            // x-walls: sign(c) (-1, 0, z s + lat c); y-walls: sign(s) (0, -1, lat s - z c).
-            let lat = |t: i32| if beam.lateral.0 == 0 { 0 } else { mul_q30(beam.lateral.0, t) };
-            let (axis, lever, sign_pos) = if beam.wall.is_x_wall() {
-                (0u8, mul_q30(z.0, s).saturating_add(lat(c)), beam.wall == Wall::North)
-            } else {
-                (1u8, lat(s).saturating_sub(mul_q30(z.0, c)), beam.wall == Wall::East)
-            };
-            // lever is mm Q16; / L -> Q16 per (L rad) mm; |z| <= 2^27 and a
-            // mount's lateral offset of a few mm keep it near 2^19: clamped
+            // -d(normal_miss)/d(theta) for the north and east walls (see
+            // `Beam::heading_lever`); mm Q16, / L -> Q16 per (L rad) mm; |z|
+            // <= 2^11 mm and the mounts' few cm keep it near 2^19: clamped
             // to the bound `correct` relies on.
+            let lever = beam.heading_lever(z).0;
+            let axis = if beam.wall.is_x_wall() { 0u8 } else { 1u8 };
+            let sign_pos = matches!(beam.wall, Wall::North | Wall::East);
             let theta = (lever >> 8).clamp(-THETA_MAX, THETA_MAX);
             // North and East: H = (-1 on the axis, +lever); South and West: (+1, -lever).
             let row = if sign_pos {
@@ -62,9 +60,14 @@ impl Estimator {
             } else {
                 Row { pos: Some((axis, true)), theta: -theta }
             };
-            // R = sigma^2 cos^2(incidence): normal^2 in Q30 via mul_hi (Q28) * 4.
-            let n2 = mul_hi(beam.normal, beam.normal).saturating_mul(4);
-            let r = mul_q30(R_LIDAR, n2).max(1);
+            // R = sigma^2 cos^2 (the cone's incidence): in Q30 via mul_hi (Q28) * 4.
+            // (square on, the normal in the cone: R itself)
+            let r = if beam.cone_normal >= ONE {
+                R_LIDAR
+            } else {
+                let n2 = mul_hi(beam.cone_normal, beam.cone_normal) << 2; // <= 2^30
+                mul_q30_unsat(R_LIDAR, n2).max(1)
+            };
             match self.correct(row, nu.0, r, Gate::On) {
                 Update::Accepted => {
                     *self.run_of(which) = 0;
@@ -98,11 +101,13 @@ impl Estimator {
     #[cold]
     #[inline(never)]
     fn lidar_outlier(&mut self, which: LidarId, row: Row, nu: crate::math::Length, r: i32, beam: &Beam) -> Update {
-        // The distance to the wall along its normal that the reading implies:
+        // The reference point's distance to the wall along its normal that
+        // the reading implies (the lidar's, less its setback):
         // one that puts the reference point outside the arena (a lidar
         // against an obstacle or pressed to a wall) is no evidence the
         // position is lost, and does not count.
-        let implied = nu.saturating_add(beam.to_wall);
+        let implied =
+            nu.saturating_add(beam.to_wall).saturating_sub(crate::math::Length(mul_q30(beam.setback.0, beam.normal)));
         let extent = if beam.wall.is_x_wall() { self.arena.length_x } else { self.arena.width_y };
         if implied.0 < 0 || implied > extent {
             return Update::Outlier;

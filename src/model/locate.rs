@@ -1,0 +1,194 @@
+//! Localization: where in the box the robot can be, from one compass
+//! heading and the two lidars' distances (the lidar models' outputs), with
+//! no prior pose. Run at power-up and on `locate`, before the filter starts.
+//!
+//! # The search
+//! With the heading taken from the compass, every point of a grid over the
+//! box ([`cfg::GRID_MM`]) where the whole body fits (both lidars inside the
+//! walls) is tried as the reference point: the arena model
+//! ([`crate::model::measurement::Beam`], the lidars' cones included) says
+//! what each lidar should read there, and the point is consistent when
+//! every given reading is within [`cfg::TOLERANCE_MM`] of that (as
+//! `|normal_miss| <= tol cone_normal`: no division). The consistent points'
+//! mean is the position; their spread, with the grid's own and the lidars'
+//! noise, its uncertainty ([`Fix`]).
+//!
+//! Two ranges and a heading fix a position when the beams meet walls of
+//! both axes; when they meet walls of one axis (near a corner, at about 45
+//! degrees) the other coordinate is free, and the consistent points spread
+//! along it, or they fall into separate groups. Either way the fix is
+//! [`Fix::ambiguous`] (spread past [`cfg::AMBIGUOUS_SPAN_MM`]) and its
+//! uncertainty says how much: reported, not guessed silently.
+//!
+//! # Cost
+//! Two [`Beam`]s per grid point: 153 x 99 points in the team's box at 5 mm,
+//! about 15 million lx106 instructions (0.2 s at 80 MHz, measured by the lx106
+//! benchmarks). The loops are bounded by [`MAX_STEPS`] per axis.
+
+use crate::config::locate as cfg;
+use crate::math::{isqrt64, mul_q30, Angle, Coord, Length};
+use crate::model::measurement::{Arena, Beam, LidarId};
+use crate::model::state::Pose;
+
+/// Grid points per axis at most (a 2 m box at 5 mm).
+pub const MAX_STEPS: i32 = 400;
+
+/// Where the search put the robot.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub struct Fix {
+    /// The consistent points' mean, at the compass heading.
+    pub pose: Pose,
+    /// One-sigma uncertainty per axis, mm (Q16): the consistent points'
+    /// spread, the grid's and the lidars' noise.
+    pub sigma_x: Length,
+    pub sigma_y: Length,
+    /// How many grid points fit the readings.
+    pub points: u32,
+    /// The points spread over more than [`cfg::AMBIGUOUS_SPAN_MM`] on an
+    /// axis: the readings do not say where along it the robot is.
+    pub ambiguous: bool,
+}
+
+/// Why there is no fix.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub enum LocateError {
+    /// Neither lidar gave a distance.
+    NoReading,
+    /// No point of the box explains the readings (a reading from something
+    /// other than the walls, or a box of another size).
+    NothingFits,
+}
+
+/// The readings the search explains.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub struct Readings {
+    pub heading: Angle,
+    pub front: Option<Length>,
+    pub right: Option<Length>,
+}
+
+/// Searches `arena` for the poses that explain `r` (see the module docs) at
+/// the compass's heading, and when nothing fits there at headings
+/// [`cfg::HEADING_STEP_DEG`] apart ever further from it, up to
+/// [`cfg::HEADING_STEPS`] each way (the compass may be disturbed).
+pub fn locate(arena: &Arena, r: &Readings) -> Result<Fix, LocateError> {
+    if r.front.is_none() && r.right.is_none() {
+        return Err(LocateError::NoReading);
+    }
+    let tol = Length::from_mm_f64(cfg::TOLERANCE_MM);
+    // the compass's heading first, then ever further from it (a disturbed
+    // compass): +-1, +-2, ... heading steps
+    let step = Angle::from_degrees_f64(cfg::HEADING_STEP_DEG);
+    let mut k: u32 = 0;
+    while k <= 2 * u32::from(cfg::HEADING_STEPS) {
+        let n = k.div_ceil(2);
+        let off = Angle(step.0.wrapping_mul(n));
+        let heading = if k % 2 == 1 { r.heading.wrapping_add(off) } else { r.heading.wrapping_sub(off) };
+        if let Ok(fix) = search(arena, &Readings { heading, ..*r }, tol) {
+            return Ok(fix);
+        }
+        k += 1;
+    }
+    Err(LocateError::NothingFits)
+}
+
+/// Sums over the consistent points, whole mm.
+#[derive(Default)]
+struct Sums {
+    n: u32,
+    x: i64,
+    y: i64,
+    xx: i64,
+    yy: i64,
+    min_x: i32,
+    max_x: i32,
+    min_y: i32,
+    max_y: i32,
+}
+
+fn search(arena: &Arena, r: &Readings, tol: Length) -> Result<Fix, LocateError> {
+    let step = cfg::GRID_MM;
+    let (lx, wy) = (arena.length_x.0 >> 16, arena.width_y.0 >> 16); // whole mm
+    let mut pose = Pose::from_mm(0, 0, r.heading);
+    let (s, c) = pose.sin_cos();
+    // each lidar's offset from the reference point in the box, mm
+    let offset = |id: LidarId| {
+        let m = id.mount();
+        let dx = mul_q30(m.forward.0, c).saturating_sub(mul_q30(m.right.0, s)) >> 16;
+        let dy = mul_q30(m.forward.0, s).saturating_add(mul_q30(m.right.0, c)) >> 16;
+        (dx, dy)
+    };
+    let (fo, ro) = (offset(LidarId::Front), offset(LidarId::Right));
+    let inside = |x: i32, y: i32, o: (i32, i32)| {
+        let (px, py) = (x.saturating_add(o.0), y.saturating_add(o.1));
+        px >= 0 && px <= lx && py >= 0 && py <= wy
+    };
+    let fits = |pose: &Pose, id: LidarId, z: Option<Length>| match z {
+        None => true,
+        Some(z) => {
+            let beam = Beam::new(arena, pose, &id.mount());
+            beam.normal_miss(z).0.saturating_abs() <= mul_q30(tol.0, beam.cone_normal)
+        }
+    };
+    let mut sums = Sums { min_x: i32::MAX, min_y: i32::MAX, max_x: i32::MIN, max_y: i32::MIN, ..Sums::default() };
+    let mut i = 0;
+    while i < MAX_STEPS {
+        let x = step.saturating_mul(i);
+        i = i.saturating_add(1);
+        if x > lx {
+            break;
+        }
+        pose.x = Coord::from_length(Length::from_mm(x));
+        let mut j = 0;
+        while j < MAX_STEPS {
+            let y = step.saturating_mul(j);
+            j = j.saturating_add(1);
+            if y > wy {
+                break;
+            }
+            if !(inside(x, y, fo) && inside(x, y, ro)) {
+                continue;
+            }
+            pose.y = Coord::from_length(Length::from_mm(y));
+            if fits(&pose, LidarId::Front, r.front) && fits(&pose, LidarId::Right, r.right) {
+                let q = &mut sums;
+                q.n = q.n.saturating_add(1);
+                q.x = q.x.saturating_add(i64::from(x));
+                q.y = q.y.saturating_add(i64::from(y));
+                q.xx = q.xx.saturating_add(i64::from(x) * i64::from(x));
+                q.yy = q.yy.saturating_add(i64::from(y) * i64::from(y));
+                (q.min_x, q.max_x) = (q.min_x.min(x), q.max_x.max(x));
+                (q.min_y, q.max_y) = (q.min_y.min(y), q.max_y.max(y));
+            }
+        }
+    }
+    if sums.n == 0 {
+        return Err(LocateError::NothingFits);
+    }
+    let n = i64::from(sums.n);
+    // the mean and the spread in 1/256 mm (n >= 1; one division each: once
+    // per search, not on the loop)
+    let mean = |sum: i64| crate::math::div_i64(sum << 8, n).unwrap_or(0);
+    let (mx, my) = (mean(sums.x), mean(sums.y));
+    // variance in mm^2 << 16: E[x^2] - mean^2, never negative
+    let var = |sq: i64, m: i64| (crate::math::div_i64(sq << 16, n).unwrap_or(0) - m * m).max(0);
+    // plus the grid's (step^2 / 12) and the lidar's noise, mm^2 << 16
+    let floor = ((i64::from(step) * i64::from(step)) << 16) / 12
+        + i64::from(crate::config::estimator::LIDAR_SIGMA.0 >> 8)
+            * i64::from(crate::config::estimator::LIDAR_SIGMA.0 >> 8);
+    // sqrt(v << 16) = sigma << 8 -> Q16: << 8
+    let sigma = |v: i64| Length((isqrt64((v + floor) as u64).min(1 << 22) << 8) as i32);
+    let span = cfg::AMBIGUOUS_SPAN_MM;
+    let pose = Pose::new(
+        Coord::from_length(Length((mx << 8) as i32)),
+        Coord::from_length(Length((my << 8) as i32)),
+        r.heading,
+    );
+    Ok(Fix {
+        pose,
+        sigma_x: sigma(var(sums.xx, mx)),
+        sigma_y: sigma(var(sums.yy, my)),
+        points: sums.n,
+        ambiguous: sums.max_x.saturating_sub(sums.min_x) > span || sums.max_y.saturating_sub(sums.min_y) > span,
+    })
+}
