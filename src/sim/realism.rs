@@ -1,6 +1,6 @@
 //! The effects that make the simulated robot as hard as the real one
 //! (host only, f64), each an option of `simulate` with its default from the
-//! lab's data where the lab measured it ([`config::sim`]):
+//! lab's data where the lab measured it ([`crate::config::sim`]):
 //!
 //! - the whole body stays in the box: the reference point, both wheels, the
 //!   skid and both lidars (a motion that would take any of them through a
@@ -63,7 +63,7 @@ impl Realism {
         spurious_share: 0.0,
         compass_disturbance_deg: 0.0,
     };
-    /// The lab's robot ([`config::sim`]).
+    /// The lab's robot ([`crate::config::sim`]).
     pub const LAB: Realism = Realism {
         whole_body: true,
         speed_spread: cfg::SPEED_SPREAD,
