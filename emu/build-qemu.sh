@@ -131,15 +131,6 @@ install_board_sources() {
     done
 }
 
-# A checkout whose build-qemu.sh predates the board's split into files adds
-# only the esp8266.c and esp8266_link.c lines, once, and copies its single
-# esp8266.c: the other files' lines would break its build (their functions
-# are static there). So the tree is left with those two lines alone, after
-# a build and after a failed one.
-leave_meson_for_single_file_boards() {
-    set_meson_files esp8266.c esp8266_link.c
-}
-
 build_qemu() {
     local build=$qemu_src/build
     if [ ! -f "$build/build.ninja" ]; then
@@ -171,7 +162,6 @@ build_test_image() { # out.elf
 
 install_missing_packages
 fetch_qemu_source
-trap leave_meson_for_single_file_boards EXIT
 install_board_sources
 build_qemu
 tmp=$(mktemp -d "$cache/emu-tmp.XXXXXX")
