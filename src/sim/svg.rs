@@ -37,7 +37,8 @@ pub fn render(arena: &Arena, tracks: &[Track<'_>], title: &str) -> String {
 
 /// [`render`] with lidar readings drawn under the tracks.
 pub fn render_with_rays(arena: &Arena, tracks: &[Track<'_>], rays: &[Ray<'_>], title: &str) -> String {
-    let legend_h = LEGEND_ROW * (tracks.len() as f64 + 1.0);
+    let rows = tracks.len() + 1 + usize::from(!rays.is_empty());
+    let legend_h = LEGEND_ROW * rows as f64;
     let w = arena.width_y + 2.0 * MARGIN;
     let h = arena.length_x + 2.0 * MARGIN + legend_h;
     // (x north, y east) -> (svg x right, svg y down)
@@ -111,6 +112,13 @@ pub fn render_with_rays(arena: &Arena, tracks: &[Track<'_>], rays: &[Ray<'_>], t
             MARGIN + 38.0,
             ly,
             escape(t.label)
+        );
+        ly += LEGEND_ROW;
+    }
+    if !rays.is_empty() {
+        let _ = writeln!(
+            s,
+            r#"<text x="{MARGIN}" y="{ly:.1}">thin lines and dots: each lidar reading, from the lidar to where its beam ended (a colour per lidar)</text>"#
         );
         ly += LEGEND_ROW;
     }
