@@ -472,11 +472,11 @@ pub mod locate {
     /// axis: the fix is ambiguous (reported as such), mm. Two tolerances
     /// and a grid step over the span of one point's neighbourhood.
     pub const AMBIGUOUS_SPAN_MM: i32 = 60;
-    /// A view taken after a turn in place explains its readings within
+    /// A view taken after turns in place explains its readings within
     /// this more, mm: a real turn pivots about a point behind the axle
-    /// (`sim::PIVOT_BEHIND_AXLE_MM`, 10 mm, spread 5 mm), and a quarter turn
-    /// then moves the reference point about 1.4 times that (14 mm, 28 mm at
-    /// two sigmas) off the turn-in-place model.
+    /// (`sim::PIVOT_BEHIND_AXLE_MM`, 10 mm, spread 5 mm), which moves the
+    /// reference point off the turn-in-place model by up to twice that
+    /// (after a half turn: 20 mm, 30 mm at two sigmas).
     pub const TURN_TOLERANCE_MM: f64 = 20.0;
     /// With more readings than this over all views, the search lets one of
     /// them go unexplained when nothing explains them all (a glancing

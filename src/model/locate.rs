@@ -92,6 +92,9 @@ pub const MAX_VIEWS: usize = 8;
 /// explain every view; the fix is the last view's pose (where the robot
 /// now is). The turned views' tolerance adds [`cfg::TURN_TOLERANCE_MM`] for
 /// a real turn's pivot off the axle. Views past [`MAX_VIEWS`] are not used.
+/// Two views can agree on a wrong pose far off; the procedure
+/// `tests/locate.rs` measures takes at least three, 45 degrees apart, and
+/// more while the fix is ambiguous.
 ///
 /// The headings tried are the compass's and, when nothing fits there,
 /// [`cfg::HEADING_STEP_DEG`] apart ever further from it, up to
