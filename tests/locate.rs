@@ -84,14 +84,14 @@ fn view(truth: &PoseF64, phase: f64, rng: &mut Rng) -> Readings {
     }
 }
 
-/// A turn in place of about `degrees` clockwise as the realistic
-/// simulator drives it (`sim::robot::SimRobot::tick`): the loop's ticks at
-/// the cw rate, the trial's speed factor, per-tick noise, a pivot behind
-/// the axle, and the body held where it would leave the box.
-fn turn_cw(start: &PoseF64, degrees: f64, rng: &mut Rng) -> PoseF64 {
+/// A turn in place of about `degrees` (clockwise when positive) as the
+/// realistic simulator drives it (`sim::robot::SimRobot::tick`): the loop's
+/// ticks at the cw or ccw rate, the trial's speed factor, per-tick noise, a
+/// pivot behind the axle, and the body held where it would leave the box.
+fn turn(start: &PoseF64, degrees: f64, rng: &mut Rng) -> PoseF64 {
     let realism = Realism::LAB;
     let arena = SimArena::default();
-    let rate = 2.5; // rad/s, the `cw` of the lab's scripts
+    let rate = 2.5f64.copysign(degrees); // rad/s, the `cw` of the lab's scripts
     let dt = 1.0 / f64::from(config::timing::LOOP_HZ);
     let ticks = (degrees.to_radians() / rate / dt).round() as u32;
     let motion = MotionF64::Turn(rate);
@@ -153,8 +153,9 @@ impl Tally {
 }
 
 /// The procedure: a view, then a turn of about 45 degrees clockwise and
-/// another view, at least three views (two can agree on a wrong pose), and
-/// more while the fix is ambiguous, up to a full circle (MAX_VIEWS).
+/// another view (counter-clockwise when the compass says the turn did not
+/// happen), at least three views (two can agree on a wrong pose), and more
+/// while the fix is ambiguous, up to MAX_VIEWS.
 #[test]
 fn views_turned_in_place_find_the_pose() {
     let mut rng = Rng::new(2315);
@@ -165,9 +166,17 @@ fn views_turned_in_place_find_the_pose() {
         let mut truth = random_pose(&mut rng);
         let phase = rng.range_f64(0.0, std::f64::consts::TAU);
         let mut views = vec![view(&truth, phase, &mut rng)];
+        let mut degrees = 45.0;
         let fix = loop {
-            truth = turn_cw(&truth, 45.0, &mut rng);
+            truth = turn(&truth, degrees, &mut rng);
             views.push(view(&truth, phase, &mut rng));
+            // a body against a wall may not turn that way: the compass says
+            // so, and the next turns go the other way
+            if let [.., a, b] = views.as_slice() {
+                if b.heading.wrapping_sub(a.heading).to_signed_millidegrees().abs() < 20_000 {
+                    degrees = -degrees;
+                }
+            }
             let fix = locate(&Arena::DEFAULT, &views).ok();
             if views.len() == 2 {
                 two.add(fix, &truth);
@@ -182,12 +191,9 @@ fn views_turned_in_place_find_the_pose() {
     two.print("locate, two views 45 degrees apart", starts);
     done.print("locate, three views and more while ambiguous", starts);
     println!("  views taken (views, starts): {:?}", views_used.iter().enumerate().skip(3).collect::<Vec<_>>());
-    // The bar is 95 %; this reaches about 94 %: most of the rest are
-    // poses by a long wall, where the cones of every direction meet that
-    // wall or the one opposite and nothing says where along it the robot
-    // is: those fixes are reported ambiguous (a drive away from the wall
-    // would settle them). Wrong fixes not flagged stay under 1 %.
-    assert!(done.right * 100 >= starts * 93, "{} of {starts}", done.right);
+    // The bar. Turning one way only leaves about 6 % ambiguous: a
+    // body against a wall that cannot turn takes the same view again.
+    assert!(done.right * 100 >= starts * 95, "{} of {starts}", done.right);
     assert!(done.wrong_unflagged.len() * 100 <= starts, "{} wrong fixes not flagged", done.wrong_unflagged.len());
 }
 

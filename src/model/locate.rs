@@ -26,8 +26,8 @@
 //! it (the state update's model), so a grid point for the first view is,
 //! after turns, a known point for each later view: a point is consistent
 //! when it explains every view. Views in more directions put beams on walls
-//! of both axes; by a long wall, where every direction's cone meets that
-//! wall or the one opposite, even a full circle leaves the fix ambiguous.
+//! of both axes. A view after a turn that did not happen (a body against a
+//! wall; the compass shows it) is the same view again and adds nothing.
 //! One reading in all may go unexplained (a spurious echo) when nothing
 //! explains them all ([`cfg::MIN_READINGS_FOR_OUTLIER`]).
 //!
@@ -93,8 +93,9 @@ pub const MAX_VIEWS: usize = 8;
 /// now is). The turned views' tolerance adds [`cfg::TURN_TOLERANCE_MM`] for
 /// a real turn's pivot off the axle. Views past [`MAX_VIEWS`] are not used.
 /// Two views can agree on a wrong pose far off; the procedure
-/// `tests/locate.rs` measures takes at least three, 45 degrees apart, and
-/// more while the fix is ambiguous.
+/// `tests/locate.rs` measures takes at least three, 45 degrees apart
+/// (turning the other way when the compass shows a turn blocked), and more
+/// while the fix is ambiguous.
 ///
 /// The headings tried are the compass's and, when nothing fits there,
 /// [`cfg::HEADING_STEP_DEG`] apart ever further from it, up to
