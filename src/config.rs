@@ -472,6 +472,17 @@ pub mod locate {
     /// axis: the fix is ambiguous (reported as such), mm. Two tolerances
     /// and a grid step over the span of one point's neighbourhood.
     pub const AMBIGUOUS_SPAN_MM: i32 = 60;
+    /// A view taken after turns in place explains its readings within
+    /// this more, mm: a real turn pivots about a point behind the axle
+    /// (`sim::PIVOT_BEHIND_AXLE_MM`, 10 mm, spread 5 mm), which moves the
+    /// reference point off the turn-in-place model by up to twice that
+    /// (after a half turn: 20 mm, 30 mm at two sigmas).
+    pub const TURN_TOLERANCE_MM: f64 = 20.0;
+    /// With more readings than this over all views, the search lets one of
+    /// them go unexplained when nothing explains them all (a glancing
+    /// reading's spurious echo, `sim::SPURIOUS_SHARE`): the rest still pin
+    /// the pose.
+    pub const MIN_READINGS_FOR_OUTLIER: u32 = 3;
     /// When nothing fits at the compass's heading, the search tries headings
     /// this far apart, degrees (the compass's 2.5-degree spread, `estimator::
     /// COMPASS_SIGMA_DEG`) ...

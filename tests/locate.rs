@@ -5,13 +5,14 @@
 
 use paperbot::config;
 use paperbot::math::{Angle, Length};
-use paperbot::model::locate::{locate, Readings};
+use paperbot::model::locate::{locate, Fix, Readings, MAX_VIEWS};
 use paperbot::model::measurement::Arena;
 use paperbot::model::LidarModel;
 use paperbot::sim::arena::Arena as SimArena;
-use paperbot::sim::body::PoseF64;
+use paperbot::sim::body::{advance, Kinematics, MotionF64, PoseF64};
 use paperbot::sim::noise::Rng;
-use paperbot::sim::realism::{compass_disturbance, glancing_failure, lidar_range, Realism};
+use paperbot::sim::realism::{compass_disturbance, glancing_failure, lidar_range, Realism, Trial};
+use paperbot::sim::robot::body_fits;
 
 /// One averaged lidar reading as the firmware sees it (the model output of
 /// the mean of `n` raw readings), or `None` when the reading failed.
@@ -69,55 +70,150 @@ fn random_pose(rng: &mut Rng) -> PoseF64 {
     }
 }
 
+/// One view as the firmware takes it at `truth`: the averaged compass
+/// heading (the floor's disturbance at `phase`, the averaged noise) and the
+/// two lidars.
+fn view(truth: &PoseF64, phase: f64, rng: &mut Rng) -> Readings {
+    use paperbot::model::measurement::LidarId;
+    let compass_err = compass_disturbance(truth.x, truth.y, &Realism::LAB, phase)
+        + rng.gauss(config::sim::COMPASS_NOISE_DEG / f64::from(config::locate::COMPASS_READINGS).sqrt()).to_radians();
+    Readings {
+        heading: Angle::from_radians_f64(truth.theta + compass_err),
+        front: lidar(truth, LidarId::Front, &config::lidar::FRONT, rng),
+        right: lidar(truth, LidarId::Right, &config::lidar::RIGHT, rng),
+    }
+}
+
+/// A turn in place of about `degrees` (clockwise when positive) as the
+/// realistic simulator drives it (`sim::robot::SimRobot::tick`): the loop's
+/// ticks at the cw or ccw rate, the trial's speed factor, per-tick noise, a
+/// pivot behind the axle, and the body held where it would leave the box.
+fn turn(start: &PoseF64, degrees: f64, rng: &mut Rng) -> PoseF64 {
+    let realism = Realism::LAB;
+    let arena = SimArena::default();
+    let rate = 2.5f64.copysign(degrees); // rad/s, the `cw` of the lab's scripts
+    let dt = 1.0 / f64::from(config::timing::LOOP_HZ);
+    let ticks = (degrees.to_radians() / rate / dt).round() as u32;
+    let motion = MotionF64::Turn(rate);
+    let trial = Trial::NONE.for_motion(motion, &realism, rng);
+    let d = config::geometry::ROTATION_TO_REFERENCE.to_mm_f64() + trial.pivot_behind_mm;
+    let mut p = *start;
+    for _ in 0..ticks {
+        let w = rate * trial.speed_factor * (1.0 + rng.gauss(config::sim::TURN_NOISE));
+        let next = advance(&p, MotionF64::Turn(w), dt, Kinematics::Rigid, d);
+        if body_fits(&arena, &realism, &next) {
+            p = next;
+        }
+    }
+    p
+}
+
+/// How a fix compares with the truth.
+#[derive(Default)]
+struct Tally {
+    right: usize,
+    ambiguous: usize,
+    ambiguous_right: usize,
+    failed: usize,
+    wrong_unflagged: Vec<(f64, f64, PoseF64)>,
+}
+
+impl Tally {
+    fn add(&mut self, fix: Option<Fix>, truth: &PoseF64) {
+        let Some(fix) = fix else {
+            self.failed += 1;
+            return;
+        };
+        let got = PoseF64::from_pose(&fix.pose);
+        let (d, h) = (got.distance(truth), got.heading_error(truth).to_degrees().abs());
+        let right = d <= 30.0 && h <= 5.0;
+        self.right += usize::from(right);
+        self.ambiguous += usize::from(fix.ambiguous);
+        self.ambiguous_right += usize::from(fix.ambiguous && right);
+        if !right && !fix.ambiguous {
+            let sigma = fix.sigma_x.to_mm_f64().hypot(fix.sigma_y.to_mm_f64());
+            self.wrong_unflagged.push((d, sigma, *truth));
+        }
+    }
+
+    fn print(&self, what: &str, starts: usize) {
+        println!(
+            "{what}: {} of {starts} right (30 mm, 5 deg); {} reported ambiguous ({} of them right anyway); \
+             {} found nothing; {} wrong and not flagged",
+            self.right,
+            self.ambiguous,
+            self.ambiguous_right,
+            self.failed,
+            self.wrong_unflagged.len()
+        );
+        for (d, sigma, t) in self.wrong_unflagged.iter().take(10) {
+            println!("  wrong, not flagged: off {d:.0} mm (sigma {sigma:.0} mm) at {t:?}");
+        }
+    }
+}
+
+/// The procedure: a view, then a turn of about 45 degrees clockwise and
+/// another view (counter-clockwise when the compass says the turn did not
+/// happen), at least three views (two can agree on a wrong pose), and more
+/// while the fix is ambiguous, up to MAX_VIEWS.
+#[test]
+fn views_turned_in_place_find_the_pose() {
+    let mut rng = Rng::new(2315);
+    let starts = 1_000;
+    let (mut two, mut done) = (Tally::default(), Tally::default());
+    let mut views_used = [0usize; MAX_VIEWS + 1];
+    for _ in 0..starts {
+        let mut truth = random_pose(&mut rng);
+        let phase = rng.range_f64(0.0, std::f64::consts::TAU);
+        let mut views = vec![view(&truth, phase, &mut rng)];
+        let mut degrees = 45.0;
+        let fix = loop {
+            truth = turn(&truth, degrees, &mut rng);
+            views.push(view(&truth, phase, &mut rng));
+            // a body against a wall may not turn that way: the compass says
+            // so, and the next turns go the other way
+            if let [.., a, b] = views.as_slice() {
+                if b.heading.wrapping_sub(a.heading).to_signed_millidegrees().abs() < 20_000 {
+                    degrees = -degrees;
+                }
+            }
+            let fix = locate(&Arena::DEFAULT, &views).ok();
+            if views.len() == 2 {
+                two.add(fix, &truth);
+            }
+            if views.len() == MAX_VIEWS || (views.len() >= 3 && fix.is_some_and(|f| !f.ambiguous)) {
+                break fix;
+            }
+        };
+        views_used[views.len()] += 1;
+        done.add(fix, &truth);
+    }
+    two.print("locate, two views 45 degrees apart", starts);
+    done.print("locate, three views and more while ambiguous", starts);
+    println!("  views taken (views, starts): {:?}", views_used.iter().enumerate().skip(3).collect::<Vec<_>>());
+    // The issue's bar. Turning one way only leaves about 6 % ambiguous: a
+    // body against a wall that cannot turn takes the same view again.
+    assert!(done.right * 100 >= starts * 95, "{} of {starts}", done.right);
+    assert!(done.wrong_unflagged.len() * 100 <= starts, "{} wrong fixes not flagged", done.wrong_unflagged.len());
+}
+
 #[test]
 fn the_search_finds_the_pose_from_random_starts() {
-    use paperbot::model::measurement::LidarId;
     let mut rng = Rng::new(23);
     let starts = 1_000;
-    let (mut right_pose, mut ambiguous, mut ambiguous_right, mut failed) = (0, 0, 0, 0);
-    let mut wrong_unflagged = 0;
-    let mut errors = vec![];
+    let mut one = Tally::default();
     for _ in 0..starts {
         let truth = random_pose(&mut rng);
         let phase = rng.range_f64(0.0, std::f64::consts::TAU);
-        let compass_err = compass_disturbance(truth.x, truth.y, &Realism::LAB, phase)
-            + rng
-                .gauss(config::sim::COMPASS_NOISE_DEG / f64::from(config::locate::COMPASS_READINGS).sqrt())
-                .to_radians();
-        let r = Readings {
-            heading: Angle::from_radians_f64(truth.theta + compass_err),
-            front: lidar(&truth, LidarId::Front, &config::lidar::FRONT, &mut rng),
-            right: lidar(&truth, LidarId::Right, &config::lidar::RIGHT, &mut rng),
-        };
-        let Ok(fix) = locate(&Arena::DEFAULT, &r) else {
-            failed += 1;
-            continue;
-        };
-        let got = PoseF64::from_pose(&fix.pose);
-        let (d, h) = (got.distance(&truth), got.heading_error(&truth).to_degrees().abs());
-        let right = d <= 30.0 && h <= 5.0;
-        right_pose += usize::from(right);
-        ambiguous += usize::from(fix.ambiguous);
-        ambiguous_right += usize::from(fix.ambiguous && right);
-        if !right && !fix.ambiguous {
-            wrong_unflagged += 1;
-            // a wrong fix must at least say how unsure it is
-            let sigma = fix.sigma_x.to_mm_f64().hypot(fix.sigma_y.to_mm_f64());
-            errors.push((d, sigma, truth));
-        }
+        let r = view(&truth, phase, &mut rng);
+        one.add(locate(&Arena::DEFAULT, &[r]).ok(), &truth);
     }
-    println!(
-        "locate: {right_pose} of {starts} right (30 mm, 5 deg); {ambiguous} reported ambiguous ({ambiguous_right} of them right anyway); \
-         {failed} found nothing; {wrong_unflagged} wrong and not flagged"
-    );
-    for (d, sigma, t) in errors.iter().take(10) {
-        println!("  wrong, not flagged: off {d:.0} mm (sigma {sigma:.0} mm) at {t:?}");
-    }
-    // The issue's bar is 95 %; one snapshot (a heading and two ranges)
-    // reaches 57 % with the lidars' cones: half the poses have both cones on
-    // walls of one axis, and those fixes are reported ambiguous. What this
-    // asserts is today's level and that wrong fixes are almost always
-    // flagged; the bar needs more than one view (turning in place).
-    assert!(right_pose * 100 >= starts * 55, "{right_pose} of {starts}");
-    assert!(wrong_unflagged * 100 <= starts * 3, "{wrong_unflagged} wrong fixes not flagged ambiguous");
+    one.print("locate, one view", starts);
+    // One snapshot (a heading and two ranges) reaches 57 % with the lidars'
+    // cones: half the poses have both cones on walls of one axis, and those
+    // fixes are reported ambiguous (turning in place for more views,
+    // above, settles most). What this asserts is that level and that wrong
+    // fixes are almost always flagged.
+    assert!(one.right * 100 >= starts * 55, "{} of {starts}", one.right);
+    assert!(one.wrong_unflagged.len() * 100 <= starts * 3, "{} wrong fixes not flagged", one.wrong_unflagged.len());
 }

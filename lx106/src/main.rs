@@ -9,6 +9,7 @@
 #![no_main]
 
 mod bench;
+mod bench_locate;
 mod bench_loop;
 mod bench_trig;
 mod float;
@@ -27,6 +28,7 @@ pub extern "C" fn rust_main() -> i32 {
     let (p2, f2) = bench::run();
     let (p3, f3) = bench_loop::run();
     bench_trig::run();
+    bench_locate::run();
     let (p2, f2) = (p2 + p3, f2 + f3);
     #[cfg(feature = "demo-fail")]
     let (p2, f2) = {

@@ -1,6 +1,7 @@
-//! Localization: where in the box the robot can be, from one compass
-//! heading and the two lidars' distances (the lidar models' outputs), with
-//! no prior pose. Run at power-up and on `locate`, before the filter starts.
+//! Localization: where in the box the robot can be, from compass headings
+//! and the two lidars' distances (the lidar models' outputs), with no prior
+//! pose, in one view or several with turns in place between them. Run at
+//! power-up and on `locate`, before the filter starts.
 //!
 //! # The search
 //! With the heading taken from the compass, every point of a grid over the
@@ -20,10 +21,23 @@
 //! [`Fix::ambiguous`] (spread past [`cfg::AMBIGUOUS_SPAN_MM`]) and its
 //! uncertainty says how much: reported, not guessed silently.
 //!
+//! # Several views
+//! A turn in place keeps the axle and swings the reference point D ahead of
+//! it (the state update's model), so a grid point for the first view is,
+//! after turns, a known point for each later view: a point is consistent
+//! when it explains every view. Views in more directions put beams on walls
+//! of both axes. A view after a turn that did not happen (a body against a
+//! wall; the compass shows it) is the same view again and adds nothing.
+//! One reading in all may go unexplained (a spurious echo) when nothing
+//! explains them all ([`cfg::MIN_READINGS_FOR_OUTLIER`]).
+//!
 //! # Cost
-//! Two [`Beam`]s per grid point: 153 x 99 points in the team's box at 5 mm,
-//! about 15 million lx106 instructions (0.2 s at 80 MHz, measured by the lx106
-//! benchmarks). The loops are bounded by [`MAX_STEPS`] per axis.
+//! Two [`Beam`]s per grid point and view: 153 x 99 points in the team's box
+//! at 5 mm, about 15 million lx106 instructions for one view (0.2 s at 80
+//! MHz, measured by the lx106 benchmarks); a later view is tried only where
+//! the earlier ones fit, and a failed search is repeated at other headings.
+//! The loops are bounded by [`MAX_STEPS`] per axis, [`MAX_VIEWS`] and the
+//! headings tried.
 
 use crate::config::locate as cfg;
 use crate::math::{isqrt64, mul_q30, Angle, Coord, Length};
@@ -67,15 +81,34 @@ pub struct Readings {
     pub right: Option<Length>,
 }
 
-/// Searches `arena` for the poses that explain `r` (see the module docs) at
-/// the compass's heading, and when nothing fits there at headings
+/// Views the search combines at most.
+pub const MAX_VIEWS: usize = 8;
+
+/// Searches `arena` for the poses that explain `views` (see the module
+/// docs): one view, or several taken in turn with a turn in place between
+/// each (the axle stays, the reference point D ahead of it circles it, as
+/// in the state update). Each turn is the difference of two compass
+/// headings, so a disturbed compass shifts all views alike. A pose must
+/// explain every view; the fix is the last view's pose (where the robot
+/// now is). The turned views' tolerance adds [`cfg::TURN_TOLERANCE_MM`] for
+/// a real turn's pivot off the axle. Views past [`MAX_VIEWS`] are not used.
+/// Two views can agree on a wrong pose far off; the procedure
+/// `tests/locate.rs` measures takes at least three, 45 degrees apart
+/// (turning the other way when the compass shows a turn blocked), and more
+/// while the fix is ambiguous.
+///
+/// The headings tried are the compass's and, when nothing fits there,
 /// [`cfg::HEADING_STEP_DEG`] apart ever further from it, up to
 /// [`cfg::HEADING_STEPS`] each way (the compass may be disturbed).
-pub fn locate(arena: &Arena, r: &Readings) -> Result<Fix, LocateError> {
-    if r.front.is_none() && r.right.is_none() {
+pub fn locate(arena: &Arena, views: &[Readings]) -> Result<Fix, LocateError> {
+    let views = views.get(..MAX_VIEWS).unwrap_or(views);
+    if views.iter().all(|r| r.front.is_none() && r.right.is_none()) {
         return Err(LocateError::NoReading);
     }
-    let tol = Length::from_mm_f64(cfg::TOLERANCE_MM);
+    let readings = views.iter().map(|r| u32::from(r.front.is_some()) + u32::from(r.right.is_some())).sum::<u32>();
+    let Some(first) = views.first() else {
+        return Err(LocateError::NoReading);
+    };
     // the compass's heading first, then ever further from it (a disturbed
     // compass): +-1, +-2, ... heading steps
     let step = Angle::from_degrees_f64(cfg::HEADING_STEP_DEG);
@@ -83,13 +116,103 @@ pub fn locate(arena: &Arena, r: &Readings) -> Result<Fix, LocateError> {
     while k <= 2 * u32::from(cfg::HEADING_STEPS) {
         let n = k.div_ceil(2);
         let off = Angle(step.0.wrapping_mul(n));
-        let heading = if k % 2 == 1 { r.heading.wrapping_add(off) } else { r.heading.wrapping_sub(off) };
-        if let Ok(fix) = search(arena, &Readings { heading, ..*r }, tol) {
+        let shifted = |r: &Readings| if k % 2 == 1 { r.heading.wrapping_add(off) } else { r.heading.wrapping_sub(off) };
+        let mut tried: [Option<View>; MAX_VIEWS] = [None; MAX_VIEWS];
+        for (i, (slot, r)) in tried.iter_mut().zip(views).enumerate() {
+            let heading = shifted(r);
+            let (offset, tol) = if i == 0 {
+                ((0, 0), cfg::TOLERANCE_MM)
+            } else {
+                (turn_offset(shifted(first), heading), cfg::TOLERANCE_MM + cfg::TURN_TOLERANCE_MM)
+            };
+            *slot = Some(View::new(arena, &Readings { heading, ..*r }, offset, tol));
+        }
+        if let Ok(fix) = search(arena, &tried, 0) {
             return Ok(fix);
+        }
+        // one failed reading (a spurious echo) among many must not hide the
+        // pose the others agree on
+        if readings > cfg::MIN_READINGS_FOR_OUTLIER {
+            if let Ok(fix) = search(arena, &tried, 1) {
+                return Ok(fix);
+            }
         }
         k += 1;
     }
     Err(LocateError::NothingFits)
+}
+
+/// How far a turn in place from heading `from` to `to` moves the reference
+/// point, whole mm: `D (cos to - cos from, sin to - sin from)`.
+fn turn_offset(from: Angle, to: Angle) -> (i32, i32) {
+    let d = crate::config::geometry::ROTATION_TO_REFERENCE.0;
+    let (s0, c0) = Pose::from_mm(0, 0, from).sin_cos();
+    let (s1, c1) = Pose::from_mm(0, 0, to).sin_cos();
+    let dx = mul_q30(d, c1).saturating_sub(mul_q30(d, c0)) >> 16;
+    let dy = mul_q30(d, s1).saturating_sub(mul_q30(d, s0)) >> 16;
+    (dx, dy)
+}
+
+/// One view as the search tries it: its readings, where its reference
+/// point is from the grid point (whole mm), and its lidars' offsets.
+#[derive(Clone, Copy)]
+struct View {
+    pose: Pose,
+    front: Option<Length>,
+    right: Option<Length>,
+    offset: (i32, i32),
+    lidars: [(i32, i32); 2],
+    tol: Length,
+    box_mm: (i32, i32),
+}
+
+impl View {
+    fn new(arena: &Arena, r: &Readings, offset: (i32, i32), tol_mm: f64) -> View {
+        let mut pose = Pose::from_mm(0, 0, r.heading);
+        let (s, c) = pose.sin_cos();
+        // each lidar's offset from the reference point in the box, mm
+        let lidar = |id: LidarId| {
+            let m = id.mount();
+            let dx = mul_q30(m.forward.0, c).saturating_sub(mul_q30(m.right.0, s)) >> 16;
+            let dy = mul_q30(m.forward.0, s).saturating_add(mul_q30(m.right.0, c)) >> 16;
+            (dx, dy)
+        };
+        View {
+            pose,
+            front: r.front,
+            right: r.right,
+            offset,
+            lidars: [lidar(LidarId::Front), lidar(LidarId::Right)],
+            tol: Length::from_mm_f64(tol_mm),
+            box_mm: (arena.length_x.0 >> 16, arena.width_y.0 >> 16),
+        }
+    }
+
+    /// How many of this view's readings the grid point (x, y) does not
+    /// explain (within the tolerance of the model's), or `None` when the
+    /// body does not fit in the box there.
+    fn misses(&self, arena: &Arena, x: i32, y: i32) -> Option<u32> {
+        let (x, y) = (x.saturating_add(self.offset.0), y.saturating_add(self.offset.1));
+        let (lx, wy) = self.box_mm;
+        let inside = |o: &(i32, i32)| {
+            let (px, py) = (x.saturating_add(o.0), y.saturating_add(o.1));
+            px >= 0 && px <= lx && py >= 0 && py <= wy
+        };
+        if !self.lidars.iter().all(inside) {
+            return None;
+        }
+        let mut pose = self.pose;
+        pose.x = Coord::from_length(Length::from_mm(x));
+        pose.y = Coord::from_length(Length::from_mm(y));
+        let fits = |id: LidarId, z: Option<Length>| match z {
+            None => true,
+            Some(z) => {
+                let beam = Beam::new(arena, &pose, &id.mount());
+                beam.normal_miss(z).0.saturating_abs() <= mul_q30(self.tol.0, beam.cone_normal)
+            }
+        };
+        Some(u32::from(!fits(LidarId::Front, self.front)) + u32::from(!fits(LidarId::Right, self.right)))
+    }
 }
 
 /// Sums over the consistent points, whole mm.
@@ -106,30 +229,15 @@ struct Sums {
     max_y: i32,
 }
 
-fn search(arena: &Arena, r: &Readings, tol: Length) -> Result<Fix, LocateError> {
+/// The grid search over the first view's reference point: a point must
+/// fit the body in the box in every view and explain all the views'
+/// readings but `allowed`; the fix is the last view's pose.
+fn search(arena: &Arena, views: &[Option<View>], allowed: u32) -> Result<Fix, LocateError> {
     let step = cfg::GRID_MM;
-    let (lx, wy) = (arena.length_x.0 >> 16, arena.width_y.0 >> 16); // whole mm
-    let mut pose = Pose::from_mm(0, 0, r.heading);
-    let (s, c) = pose.sin_cos();
-    // each lidar's offset from the reference point in the box, mm
-    let offset = |id: LidarId| {
-        let m = id.mount();
-        let dx = mul_q30(m.forward.0, c).saturating_sub(mul_q30(m.right.0, s)) >> 16;
-        let dy = mul_q30(m.forward.0, s).saturating_add(mul_q30(m.right.0, c)) >> 16;
-        (dx, dy)
+    let (Some(Some(first)), Some(last)) = (views.first(), views.iter().flatten().last()) else {
+        return Err(LocateError::NoReading);
     };
-    let (fo, ro) = (offset(LidarId::Front), offset(LidarId::Right));
-    let inside = |x: i32, y: i32, o: (i32, i32)| {
-        let (px, py) = (x.saturating_add(o.0), y.saturating_add(o.1));
-        px >= 0 && px <= lx && py >= 0 && py <= wy
-    };
-    let fits = |pose: &Pose, id: LidarId, z: Option<Length>| match z {
-        None => true,
-        Some(z) => {
-            let beam = Beam::new(arena, pose, &id.mount());
-            beam.normal_miss(z).0.saturating_abs() <= mul_q30(tol.0, beam.cone_normal)
-        }
-    };
+    let (lx, wy) = first.box_mm;
     let mut sums = Sums { min_x: i32::MAX, min_y: i32::MAX, max_x: i32::MIN, max_y: i32::MIN, ..Sums::default() };
     let mut i = 0;
     while i < MAX_STEPS {
@@ -138,7 +246,6 @@ fn search(arena: &Arena, r: &Readings, tol: Length) -> Result<Fix, LocateError> 
         if x > lx {
             break;
         }
-        pose.x = Coord::from_length(Length::from_mm(x));
         let mut j = 0;
         while j < MAX_STEPS {
             let y = step.saturating_mul(j);
@@ -146,11 +253,14 @@ fn search(arena: &Arena, r: &Readings, tol: Length) -> Result<Fix, LocateError> 
             if y > wy {
                 break;
             }
-            if !(inside(x, y, fo) && inside(x, y, ro)) {
-                continue;
+            let mut missed = Some(0u32);
+            for v in views.iter().flatten() {
+                missed = missed.zip(v.misses(arena, x, y)).map(|(a, b)| a.saturating_add(b)).filter(|&m| m <= allowed);
+                if missed.is_none() {
+                    break;
+                }
             }
-            pose.y = Coord::from_length(Length::from_mm(y));
-            if fits(&pose, LidarId::Front, r.front) && fits(&pose, LidarId::Right, r.right) {
+            if missed.is_some() {
                 let q = &mut sums;
                 q.n = q.n.saturating_add(1);
                 q.x = q.x.saturating_add(i64::from(x));
@@ -179,10 +289,11 @@ fn search(arena: &Arena, r: &Readings, tol: Length) -> Result<Fix, LocateError> 
     // sqrt(v << 16) = sigma << 8 -> Q16: << 8
     let sigma = |v: i64| Length((isqrt64((v + floor) as u64).min(1 << 22) << 8) as i32);
     let span = cfg::AMBIGUOUS_SPAN_MM;
+    let (ox, oy) = (i64::from(last.offset.0) << 8, i64::from(last.offset.1) << 8);
     let pose = Pose::new(
-        Coord::from_length(Length((mx << 8) as i32)),
-        Coord::from_length(Length((my << 8) as i32)),
-        r.heading,
+        Coord::from_length(Length(((mx + ox) << 8) as i32)),
+        Coord::from_length(Length(((my + oy) << 8) as i32)),
+        last.pose.theta,
     );
     Ok(Fix {
         pose,

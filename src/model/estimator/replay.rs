@@ -152,7 +152,7 @@ pub fn locate_start(samples: &[Sample], arena: Arena) -> Result<Fix, LocateError
         right = distance(s.right_mm, &config::lidar::RIGHT).or(right);
         if let Some(heading) = s.heading {
             if front.is_some() || right.is_some() {
-                return locate(&arena, &Readings { heading, front, right });
+                return locate(&arena, &[Readings { heading, front, right }]);
             }
         }
     }
