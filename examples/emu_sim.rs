@@ -29,6 +29,7 @@ use paperbot::sim::body::{advance, MotionF64, PoseF64};
 use paperbot::sim::link::{read_event, EmulatedRobot, FaultWindow, WireFault};
 use paperbot::sim::robot::{Noise, SimConfig};
 use paperbot::sim::script::{default_script, Script};
+use paperbot::sim::summary::{Compared, Summary};
 use paperbot::sim::svg::{render, Track};
 
 struct Args {
@@ -224,33 +225,20 @@ fn summary(args: &Args, robot: &EmulatedRobot) -> ExitCode {
         eprintln!("emu-sim: no telemetry rows after bring-up");
         return ExitCode::FAILURE;
     };
-    eprintln!("  true      x {:8.1} mm  y {:8.1} mm  heading {:6.1} deg", t.x, t.y, t.theta.to_degrees());
-    eprintln!("  estimate  x {:8.1} mm  y {:8.1} mm  heading {:6.1} deg", e.x, e.y, e.theta.to_degrees());
-    eprintln!("  dead reck x {:8.1} mm  y {:8.1} mm  heading {:6.1} deg", dr.x, dr.y, dr.theta.to_degrees());
-    eprintln!(
-        "  estimate error at the end {:.1} mm, {:.1} deg (dead reckoning {:.1} mm); wall collisions: {} ticks",
-        t.distance(e),
-        t.heading_error(e).to_degrees(),
-        t.distance(dr),
-        robot.collisions(),
-    );
-    let n = rows.len().max(1) as f64;
-    let rms = |of: &[PoseF64], err: &dyn Fn(&PoseF64, &PoseF64) -> f64| {
-        (truth.iter().zip(of).map(|(a, b)| err(a, b).powi(2)).sum::<f64>() / n).sqrt()
-    };
-    let mm = |a: &PoseF64, b: &PoseF64| a.distance(b);
-    let deg = |a: &PoseF64, b: &PoseF64| a.heading_error(b).to_degrees();
-    eprintln!(
-        "  estimate error over the run (rms) {:.1} mm, {:.1} deg (dead reckoning {:.1} mm, {:.1} deg)",
-        rms(&est, &mm),
-        rms(&est, &deg),
-        rms(&dead_track, &mm),
-        rms(&dead_track, &deg),
-    );
-    let fc = last.faults;
-    eprintln!(
-        "  faults: bus {}, timeout {}, missing {}, bad sample {}, outliers {}, overruns {}",
-        fc.bus, fc.timeout, fc.missing, fc.bad_sample, fc.rejected_outliers, fc.overruns
+    let samples: Vec<Compared> = truth
+        .iter()
+        .zip(&est)
+        .zip(&dead_track)
+        .map(|((&truth, &estimate), &dead_reckoned)| Compared { truth, estimate, dead_reckoned })
+        .collect();
+    eprint!(
+        "{}",
+        Summary {
+            end: Compared { truth: *t, estimate: *e, dead_reckoned: *dr },
+            samples: &samples,
+            collisions: robot.collisions(),
+            faults: last.faults,
+        }
     );
     let refused: Vec<&String> = robot.lines.iter().map(|(_, l)| l).filter(|l| l.starts_with("# err")).collect();
     if refused.is_empty() {

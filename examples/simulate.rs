@@ -42,6 +42,7 @@ use paperbot::sim::body::{Kinematics, PoseF64};
 use paperbot::sim::realism::Realism;
 use paperbot::sim::robot::{Noise, SimConfig, SimRobot};
 use paperbot::sim::script::{default_script, Script};
+use paperbot::sim::summary::{Compared, Summary};
 use paperbot::sim::svg::{render, Track};
 
 struct Args {
@@ -220,33 +221,18 @@ fn main() -> ExitCode {
         elapsed.as_secs_f64(),
         args.out
     );
-    eprintln!("  true      x {:8.1} mm  y {:8.1} mm  heading {:6.1} deg", t.x, t.y, t.theta.to_degrees());
-    eprintln!("  estimate  x {:8.1} mm  y {:8.1} mm  heading {:6.1} deg", e.x, e.y, e.theta.to_degrees());
-    eprintln!("  dead reck x {:8.1} mm  y {:8.1} mm  heading {:6.1} deg", d.x, d.y, d.theta.to_degrees());
-    let f = ctl.faults();
-    let n = samples.len().max(1) as f64;
-    let rms = |err: &dyn Fn(&PoseF64, &PoseF64) -> f64, of: &dyn Fn(&paperbot::sim::robot::Sample) -> PoseF64| {
-        (samples.iter().map(|s| err(&s.truth, &of(s)).powi(2)).sum::<f64>() / n).sqrt()
-    };
-    let mm = |a: &PoseF64, b: &PoseF64| a.distance(b);
-    let deg = |a: &PoseF64, b: &PoseF64| a.heading_error(b).to_degrees();
-    eprintln!(
-        "  estimate error at the end {:.1} mm, {:.1} deg (dead reckoning {:.1} mm); wall collisions: {} ticks",
-        t.distance(&e),
-        t.heading_error(&e).to_degrees(),
-        t.distance(&d),
-        robot.collisions(),
-    );
-    eprintln!(
-        "  estimate error over the run (rms) {:.1} mm, {:.1} deg (dead reckoning {:.1} mm, {:.1} deg)",
-        rms(&mm, &|s| s.estimate),
-        rms(&deg, &|s| s.estimate),
-        rms(&mm, &|s| s.dead_reckoned),
-        rms(&deg, &|s| s.dead_reckoned),
-    );
-    eprintln!(
-        "  faults: bus {}, timeout {}, missing {}, bad sample {}, outliers {}, overruns {}",
-        f.bus, f.timeout, f.missing, f.bad_sample, f.rejected_outliers, f.overruns
+    let samples: Vec<Compared> = samples
+        .iter()
+        .map(|s| Compared { truth: s.truth, estimate: s.estimate, dead_reckoned: s.dead_reckoned })
+        .collect();
+    eprint!(
+        "{}",
+        Summary {
+            end: Compared { truth: t, estimate: e, dead_reckoned: d },
+            samples: &samples,
+            collisions: robot.collisions(),
+            faults: ctl.faults(),
+        }
     );
     if refused.is_empty() {
         return ExitCode::SUCCESS;

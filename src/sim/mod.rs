@@ -15,6 +15,7 @@ pub mod robot;
 pub mod script;
 pub mod sensors;
 pub mod serve;
+pub mod summary;
 pub mod svg;
 pub mod vl53l0x;
 pub mod wire;
