@@ -145,6 +145,8 @@ struct Incidence {
     t_sh: i32,
 }
 
+// tick bar: Incidence and sides_clear are inlined into `Beam::new`, on a
+// lidar correction's path
 impl Incidence {
     #[inline(always)]
     fn new(n: i32, t: i32) -> Incidence {
@@ -266,6 +268,7 @@ const SIDE_ALLOWANCE: i32 = 1 << 20;
 /// margin in Q14 mm, against a few LSB of rounding) it decides exactly what
 /// the cone's products on both axes would: the wall ahead, and never near a
 /// corner for a margin up to the largest (the unit test below checks it).
+// tick bar (see Incidence)
 #[inline(always)]
 fn sides_clear(ahead: Length, side: Length, t: i32, cone_normal: i32) -> bool {
     // t <= 2^30 / sqrt 2 (t <= n): the sum below 2^30; the products in Q14
