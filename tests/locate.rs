@@ -5,7 +5,7 @@
 
 use paperbot::config;
 use paperbot::math::{Angle, Length};
-use paperbot::model::locate::{locate, Fix, Readings, MAX_VIEWS};
+use paperbot::model::locate::{locate, Fix, Readings, Search, MAX_VIEWS};
 use paperbot::model::measurement::Arena;
 use paperbot::model::LidarModel;
 use paperbot::sim::arena::Arena as SimArena;
@@ -216,4 +216,42 @@ fn the_search_finds_the_pose_from_random_starts() {
     // fixes are almost always flagged.
     assert!(one.right * 100 >= starts * 55, "{} of {starts}", one.right);
     assert!(one.wrong_unflagged.len() * 100 <= starts * 3, "{} wrong fixes not flagged", one.wrong_unflagged.len());
+}
+
+/// The robot spreads the search over its ticks ([`Search::step`], a few
+/// grid columns at a time): the same answer as the search run to the end,
+/// from starts where the compass's heading fits and where it does not.
+#[test]
+fn the_search_a_few_columns_at_a_time_gives_the_same_fix() {
+    let mut rng = Rng::new(7);
+    let mut steps_seen = Vec::new();
+    for start in 0..40 {
+        let mut truth = random_pose(&mut rng);
+        let phase = rng.range_f64(0.0, std::f64::consts::TAU);
+        let mut views = vec![view(&truth, phase, &mut rng)];
+        for _ in 0..2 {
+            truth = turn(&truth, 45.0, &mut rng);
+            views.push(view(&truth, phase, &mut rng));
+        }
+        if start % 4 == 0 {
+            // a compass 20 degrees off: passes at other headings
+            for v in &mut views {
+                v.heading = v.heading.wrapping_add(Angle::from_degrees_f64(20.0));
+            }
+        }
+        let whole = locate(&Arena::DEFAULT, &views);
+        let mut search = Search::new(&views).unwrap();
+        let mut steps = 0;
+        let stepped = loop {
+            steps += 1;
+            if let Some(r) = search.step(&Arena::DEFAULT, 3) {
+                break r;
+            }
+        };
+        assert_eq!(stepped, whole, "start {start}");
+        steps_seen.push(steps);
+    }
+    steps_seen.sort();
+    println!("steps of 3 columns: fewest {}, most {}", steps_seen[0], steps_seen[39]);
+    assert!(steps_seen[39] > 60, "a pass over the 153 columns takes 52 steps: some searches needed several");
 }

@@ -85,39 +85,125 @@ pub struct Readings {
 pub const MAX_VIEWS: usize = 8;
 
 /// Searches `arena` for the poses that explain `views` (see the module
-/// docs): one view, or several taken in turn with a turn in place between
-/// each (the axle stays, the reference point D ahead of it circles it, as
-/// in the state update). Each turn is the difference of two compass
-/// headings, so a disturbed compass shifts all views alike. A pose must
-/// explain every view; the fix is the last view's pose (where the robot
-/// now is). The turned views' tolerance adds [`cfg::TURN_TOLERANCE_MM`] for
-/// a real turn's pivot off the axle. Views past [`MAX_VIEWS`] are not used.
-/// Two views can agree on a wrong pose far off; the procedure
-/// `tests/locate.rs` measures takes at least three, 45 degrees apart
-/// (turning the other way when the compass shows a turn blocked), and more
-/// while the fix is ambiguous.
+/// docs), to the end: [`Search`] run until it has its answer. One view, or
+/// several taken in turn with a turn in place between each (the axle
+/// stays, the reference point D ahead of it circles it, as in the state
+/// update). Each turn is the difference of two compass headings, so a
+/// disturbed compass shifts all views alike. A pose must explain every
+/// view; the fix is the last view's pose (where the robot now is). The
+/// turned views' tolerance adds [`cfg::TURN_TOLERANCE_MM`] for a real
+/// turn's pivot off the axle. Views past [`MAX_VIEWS`] are not used. Two
+/// views can agree on a wrong pose far off; the robot's procedure
+/// (`control::localize`) takes at least three, 45 degrees apart (turning
+/// the other way when the compass shows a turn blocked), and more while
+/// the fix is ambiguous.
 ///
 /// The headings tried are the compass's and, when nothing fits there,
 /// [`cfg::HEADING_STEP_DEG`] apart ever further from it, up to
 /// [`cfg::HEADING_STEPS`] each way (the compass may be disturbed).
 pub fn locate(arena: &Arena, views: &[Readings]) -> Result<Fix, LocateError> {
-    let views = views.get(..MAX_VIEWS).unwrap_or(views);
-    if views.iter().all(|r| r.front.is_none() && r.right.is_none()) {
-        return Err(LocateError::NoReading);
+    let mut search = Search::new(views)?;
+    // a step of more columns than a grid has ends its pass
+    for _ in 0..=Search::MAX_PASSES {
+        if let Some(result) = search.step(arena, MAX_STEPS as u32 + 1) {
+            return result;
+        }
     }
-    let readings = views.iter().map(|r| u32::from(r.front.is_some()) + u32::from(r.right.is_some())).sum::<u32>();
-    let Some(first) = views.first() else {
-        return Err(LocateError::NoReading);
-    };
-    // the compass's heading first, then ever further from it (a disturbed
-    // compass): +-1, +-2, ... heading steps
-    let step = Angle::from_degrees_f64(cfg::HEADING_STEP_DEG);
-    let mut k: u32 = 0;
-    while k <= 2 * u32::from(cfg::HEADING_STEPS) {
-        let n = k.div_ceil(2);
-        let off = Angle(step.0.wrapping_mul(n));
+    Err(LocateError::NothingFits)
+}
+
+/// The search of [`locate`] a few grid columns at a time, so the robot's
+/// loop can spread it over its ticks ([`Search::step`]): one pass over the
+/// grid per heading tried (and a second, letting one reading go, when
+/// there are enough readings), the same passes in the same order.
+#[derive(Clone, Copy, Debug)]
+pub struct Search {
+    views: [Readings; MAX_VIEWS],
+    count: usize,
+    /// Readings over all views (for the one-unexplained-reading pass).
+    readings: u32,
+    /// The heading tried: 0 the compass's, then 2n - 1 (+n steps), 2n (-n).
+    heading_try: u32,
+    /// Readings a point may leave unexplained in this pass (0 or 1).
+    allowed: u32,
+    /// The next grid column of this pass.
+    column: i32,
+    sums: Sums,
+}
+
+impl Search {
+    /// Passes over the grid at most: two per heading tried.
+    pub const MAX_PASSES: u32 = 2 * (2 * cfg::HEADING_STEPS as u32 + 1);
+
+    /// A search of `views` (the first [`MAX_VIEWS`]), not started.
+    pub fn new(views: &[Readings]) -> Result<Search, LocateError> {
+        let views = views.get(..MAX_VIEWS).unwrap_or(views);
+        if views.iter().all(|r| r.front.is_none() && r.right.is_none()) {
+            return Err(LocateError::NoReading);
+        }
+        let mut kept = [Readings { heading: Angle::ZERO, front: None, right: None }; MAX_VIEWS];
+        for (slot, r) in kept.iter_mut().zip(views) {
+            *slot = *r;
+        }
+        let readings = views.iter().map(|r| u32::from(r.front.is_some()) + u32::from(r.right.is_some())).sum();
+        Ok(Search {
+            views: kept,
+            count: views.len(),
+            readings,
+            heading_try: 0,
+            allowed: 0,
+            column: 0,
+            sums: Sums::EMPTY,
+        })
+    }
+
+    /// Searches up to `columns` more grid columns: `None` while the search
+    /// goes on, then its answer (the same as [`locate`]'s).
+    pub fn step(&mut self, arena: &Arena, columns: u32) -> Option<Result<Fix, LocateError>> {
+        if self.heading_try > 2 * u32::from(cfg::HEADING_STEPS) {
+            return Some(Err(LocateError::NothingFits));
+        }
+        let views = self.tried(arena);
+        let lx = arena.length_x.0 >> 16;
+        for _ in 0..columns {
+            let x = cfg::GRID_MM.saturating_mul(self.column);
+            if x > lx || self.column >= MAX_STEPS {
+                return self.pass_done(&views);
+            }
+            self.column = self.column.saturating_add(1);
+            search_column(arena, &views, self.allowed, x, &mut self.sums);
+        }
+        None
+    }
+
+    /// A pass is over: its fix, or the next pass.
+    fn pass_done(&mut self, views: &[Option<View>; MAX_VIEWS]) -> Option<Result<Fix, LocateError>> {
+        if let Some(fix) = fix_from(&self.sums, views) {
+            return Some(Ok(fix));
+        }
+        (self.column, self.sums) = (0, Sums::EMPTY);
+        // one failed reading (a spurious echo) among many must not hide
+        // the pose the others agree on
+        if self.allowed == 0 && self.readings > cfg::MIN_READINGS_FOR_OUTLIER {
+            self.allowed = 1;
+            return None;
+        }
+        self.allowed = 0;
+        self.heading_try = self.heading_try.saturating_add(1);
+        None
+    }
+
+    /// The views at this pass's heading: the compass's, or shifted by
+    /// whole heading steps (a disturbed compass), alternately up and down.
+    fn tried(&self, arena: &Arena) -> [Option<View>; MAX_VIEWS] {
+        let k = self.heading_try;
+        let off = Angle(Angle::from_degrees_f64(cfg::HEADING_STEP_DEG).0.wrapping_mul(k.div_ceil(2)));
         let shifted = |r: &Readings| if k % 2 == 1 { r.heading.wrapping_add(off) } else { r.heading.wrapping_sub(off) };
+        let views = self.views.get(..self.count).unwrap_or(&[]);
         let mut tried: [Option<View>; MAX_VIEWS] = [None; MAX_VIEWS];
+        let Some(first) = views.first() else {
+            return tried;
+        };
         for (i, (slot, r)) in tried.iter_mut().zip(views).enumerate() {
             let heading = shifted(r);
             let (offset, tol) = if i == 0 {
@@ -127,19 +213,8 @@ pub fn locate(arena: &Arena, views: &[Readings]) -> Result<Fix, LocateError> {
             };
             *slot = Some(View::new(arena, &Readings { heading, ..*r }, offset, tol));
         }
-        if let Ok(fix) = search(arena, &tried, 0) {
-            return Ok(fix);
-        }
-        // one failed reading (a spurious echo) among many must not hide the
-        // pose the others agree on
-        if readings > cfg::MIN_READINGS_FOR_OUTLIER {
-            if let Ok(fix) = search(arena, &tried, 1) {
-                return Ok(fix);
-            }
-        }
-        k += 1;
+        tried
     }
-    Err(LocateError::NothingFits)
 }
 
 /// How far a turn in place from heading `from` to `to` moves the reference
@@ -216,7 +291,7 @@ impl View {
 }
 
 /// Sums over the consistent points, whole mm.
-#[derive(Default)]
+#[derive(Clone, Copy, Debug)]
 struct Sums {
     n: u32,
     x: i64,
@@ -229,51 +304,54 @@ struct Sums {
     max_y: i32,
 }
 
-/// The grid search over the first view's reference point: a point must
+impl Sums {
+    const EMPTY: Sums =
+        Sums { n: 0, x: 0, y: 0, xx: 0, yy: 0, min_x: i32::MAX, max_x: i32::MIN, min_y: i32::MAX, max_y: i32::MIN };
+
+    fn add(&mut self, x: i32, y: i32) {
+        self.n = self.n.saturating_add(1);
+        self.x = self.x.saturating_add(i64::from(x));
+        self.y = self.y.saturating_add(i64::from(y));
+        self.xx = self.xx.saturating_add(i64::from(x) * i64::from(x));
+        self.yy = self.yy.saturating_add(i64::from(y) * i64::from(y));
+        (self.min_x, self.max_x) = (self.min_x.min(x), self.max_x.max(x));
+        (self.min_y, self.max_y) = (self.min_y.min(y), self.max_y.max(y));
+    }
+}
+
+/// One grid column (the first view's reference point at `x`): a point must
 /// fit the body in the box in every view and explain all the views'
-/// readings but `allowed`; the fix is the last view's pose.
-fn search(arena: &Arena, views: &[Option<View>], allowed: u32) -> Result<Fix, LocateError> {
-    let step = cfg::GRID_MM;
-    let (Some(Some(first)), Some(last)) = (views.first(), views.iter().flatten().last()) else {
-        return Err(LocateError::NoReading);
+/// readings but `allowed`.
+fn search_column(arena: &Arena, views: &[Option<View>; MAX_VIEWS], allowed: u32, x: i32, sums: &mut Sums) {
+    let Some(Some(first)) = views.first() else {
+        return;
     };
-    let (lx, wy) = first.box_mm;
-    let mut sums = Sums { min_x: i32::MAX, min_y: i32::MAX, max_x: i32::MIN, max_y: i32::MIN, ..Sums::default() };
-    let mut i = 0;
-    while i < MAX_STEPS {
-        let x = step.saturating_mul(i);
-        i = i.saturating_add(1);
-        if x > lx {
+    let wy = first.box_mm.1;
+    for j in 0..MAX_STEPS {
+        let y = cfg::GRID_MM.saturating_mul(j);
+        if y > wy {
             break;
         }
-        let mut j = 0;
-        while j < MAX_STEPS {
-            let y = step.saturating_mul(j);
-            j = j.saturating_add(1);
-            if y > wy {
+        let mut missed = Some(0u32);
+        for v in views.iter().flatten() {
+            missed = missed.zip(v.misses(arena, x, y)).map(|(a, b)| a.saturating_add(b)).filter(|&m| m <= allowed);
+            if missed.is_none() {
                 break;
             }
-            let mut missed = Some(0u32);
-            for v in views.iter().flatten() {
-                missed = missed.zip(v.misses(arena, x, y)).map(|(a, b)| a.saturating_add(b)).filter(|&m| m <= allowed);
-                if missed.is_none() {
-                    break;
-                }
-            }
-            if missed.is_some() {
-                let q = &mut sums;
-                q.n = q.n.saturating_add(1);
-                q.x = q.x.saturating_add(i64::from(x));
-                q.y = q.y.saturating_add(i64::from(y));
-                q.xx = q.xx.saturating_add(i64::from(x) * i64::from(x));
-                q.yy = q.yy.saturating_add(i64::from(y) * i64::from(y));
-                (q.min_x, q.max_x) = (q.min_x.min(x), q.max_x.max(x));
-                (q.min_y, q.max_y) = (q.min_y.min(y), q.max_y.max(y));
-            }
+        }
+        if missed.is_some() {
+            sums.add(x, y);
         }
     }
+}
+
+/// The fix from a pass's consistent points (none: no fix); the pose is the
+/// last view's.
+fn fix_from(sums: &Sums, views: &[Option<View>; MAX_VIEWS]) -> Option<Fix> {
+    let step = cfg::GRID_MM;
+    let last = views.iter().flatten().last()?;
     if sums.n == 0 {
-        return Err(LocateError::NothingFits);
+        return None;
     }
     let n = i64::from(sums.n);
     // the mean and the spread in 1/256 mm (n >= 1; one division each: once
@@ -295,7 +373,7 @@ fn search(arena: &Arena, views: &[Option<View>], allowed: u32) -> Result<Fix, Lo
         Coord::from_length(Length(((my + oy) << 8) as i32)),
         last.pose.theta,
     );
-    Ok(Fix {
+    Some(Fix {
         pose,
         sigma_x: sigma(var(sums.xx, mx)),
         sigma_y: sigma(var(sums.yy, my)),
