@@ -498,6 +498,39 @@ pub mod locate {
     /// against the truth is mostly per heading, not per reading, so more
     /// would not help (data `magnetometer_heading.csv`).
     pub const COMPASS_READINGS: u8 = 20;
+    /// A view's readings are taken for at most this long, ms; a lidar that
+    /// gave fewer than `LIDAR_READINGS` by then gives the mean of what it
+    /// gave (none: no distance in that view). Five lidar periods and a
+    /// half: room for a dropped reading or two.
+    pub const VIEW_LIMIT_MS: u32 = 300;
+    /// The robot localizes at power-up (the firmware and the simulator),
+    /// turning in place: set false to start at the box's centre, unknown
+    /// (`pose` or `locate` then).
+    pub const AT_POWER_UP: bool = true;
+    /// Views taken before the first search: two views can agree on a
+    /// wrong pose far off (`tests/locate.rs`: 80 % right from two, 98.7 %
+    /// from three).
+    pub const MIN_VIEWS: usize = 3;
+    /// The turn in place between views, degrees: two views at 45 degrees
+    /// put the beams on walls of both axes from most of the box.
+    pub const TURN_DEG: i32 = 45;
+    /// Its rate, mrad/s: `goto`'s turn rate (`goto::TURN_MRAD_S`).
+    pub const TURN_MRAD_S: i32 = super::goto::TURN_MRAD_S;
+    /// The body stands this long after a turn before its view is taken,
+    /// ms: the servos stop within a tick (data `servo_runs.csv`), and a
+    /// lidar reading begun while turning (33 ms each) is over.
+    pub const SETTLE_MS: u32 = 100;
+    /// A turn the compass says moved less than this, degrees, was blocked
+    /// (the body against a wall): the next turns go the other way.
+    pub const BLOCKED_TURN_DEG: i32 = 20;
+    /// Grid columns searched per loop tick: about 1.3 ms each on the lx106
+    /// (a column is 99 points of the team's box, lx106/BENCHMARKS.md), so
+    /// two leave most of the 10 ms tick for its work, and a pass over the
+    /// box takes 0.8 s.
+    pub const COLUMNS_PER_TICK: u32 = 2;
+    /// The whole procedure's time limit, ms: eight views (5 s) and a
+    /// search that tries every heading (50 passes, 39 s).
+    pub const TIME_LIMIT_MS: u32 = 60_000;
 }
 
 /// The simulated robot (`sim`, host only; f64 is fine: nothing here reaches

@@ -296,13 +296,36 @@ fn trim_moves_the_neutral_of_one_servo() {
 }
 
 #[test]
-fn pose_and_reset_set_the_pose() {
+fn pose_sets_the_pose() {
     let (mut ctl, mut out) = setup();
     send(&mut ctl, &mut out, "pose 120 -45 90");
     assert_eq!(out.take(), ["# ok pose 120 -45 90.000"]);
     assert_eq!(ctl.pose(), Pose::from_mm(120, -45, Angle::QUARTER_TURN));
+}
+
+/// `reset` is `locate`: the robot stands for its first view; `status`
+/// leaves it at that, any other command ends it and says so (the pose is
+/// then unknown: `goto` refuses it). `tests/localize.rs` runs it to the end.
+#[test]
+fn reset_locates_and_a_command_interrupts_it() {
+    let (mut ctl, mut out) = setup();
+    send(&mut ctl, &mut out, "pose 120 -45 90");
     send(&mut ctl, &mut out, "reset");
-    assert_eq!(ctl.pose(), Pose::default());
+    assert_eq!(out.take()[1], "# ok locate");
+    run(&mut ctl, &mut out, 0, 50);
+    assert_eq!(ctl.status().mode, "locate");
+    assert_eq!(ctl.applied().motion, Motion::Stop, "the first view is taken standing");
+    send(&mut ctl, &mut out, "status");
+    assert_eq!(ctl.status().mode, "locate");
+    out.take();
+    send(&mut ctl, &mut out, "stop");
+    assert_eq!(
+        out.take(),
+        ["# locate failed: interrupted by a command; the pose is unknown until `pose` or `locate`", "# ok stop"]
+    );
+    assert_eq!(ctl.status().mode, "idle");
+    send(&mut ctl, &mut out, "goto 300 200");
+    assert!(out.take()[0].starts_with("# err goto 300 200: "), "an unknown pose is refused");
 }
 
 #[test]

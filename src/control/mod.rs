@@ -2,6 +2,7 @@
 //! telemetry) and the serial protocol.
 
 pub mod goto;
+pub mod localize;
 pub mod log;
 pub mod mission;
 pub mod protocol;

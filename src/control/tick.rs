@@ -52,6 +52,7 @@
 
 mod clock;
 mod health;
+mod locating;
 mod mode;
 mod untethered;
 mod views;
@@ -77,6 +78,7 @@ pub use health::SensorHealth;
 pub use mode::Mode;
 pub use untethered::{MissionPhase, MissionRun};
 
+use crate::control::localize::{Failure, Procedure};
 use crate::control::log::{RingLog, RowLog};
 use crate::control::mission::Mission;
 
@@ -162,8 +164,11 @@ pub struct Controller<F, R, C, S, L = RingLog<0>> {
     model: ActuatorModel,
     input: LineBuffer,
     out: OutLine<MAX_OUT_LINE>,
-    // tick bar: the mission and the log are large and off the tick's path: last
+    // tick bar: the mission, the localization procedure and the log are
+    // large and off the tick's path: last
     mission: Mission,
+    /// The localization procedure (its state while in [`Mode::Locate`]).
+    locating: Procedure,
     log: L,
 }
 
@@ -247,6 +252,7 @@ where
             dump_next: None,
             mission_changed: false,
             mission: Mission::new(),
+            locating: Procedure::new(),
             log,
         }
     }
@@ -280,10 +286,13 @@ where
     pub fn handle(&mut self, cmd: Command, sink: &mut impl LineSink) {
         self.command_seen = true;
         self.command_received(sink);
-        if matches!(self.mode, Mode::Calibrate { .. })
-            && !matches!(cmd, Command::Status | Command::Help | Command::Rate { .. })
-        {
-            self.end_calibration(None, sink);
+        // a command ends a sweep or a localization (it runs instead)
+        if !matches!(cmd, Command::Status | Command::Help | Command::Rate { .. }) {
+            match self.mode {
+                Mode::Calibrate { .. } => self.end_calibration(None, sink),
+                Mode::Locate { .. } => self.end_locate(Err(Failure::Interrupted), sink),
+                _ => {}
+            }
         }
         // a motion, a goto or face (which may be refused) and a mission
         // start answer for themselves
@@ -350,6 +359,7 @@ where
             Command::Mission(op) => self.mission_op(op, &cmd, sink),
             Command::Log { hz } => self.set_log_rate(hz),
             Command::Dump => self.start_dump(sink),
+            Command::Locate => self.begin_locate(),
         }
     }
 
@@ -406,10 +416,15 @@ where
         self.advance(self.applied.motion, dt_us);
 
         // 3. sensing, then at most MAX_CORRECTIONS_PER_TICK corrections
+        // (while locating, the readings go to the views instead)
         self.sense(now);
-        for _ in 0..config::timing::MAX_CORRECTIONS_PER_TICK {
-            if !self.correct_one() {
-                break;
+        if matches!(self.mode, Mode::Locate { .. }) {
+            self.take_view_readings();
+        } else {
+            for _ in 0..config::timing::MAX_CORRECTIONS_PER_TICK {
+                if !self.correct_one() {
+                    break;
+                }
             }
         }
 
@@ -528,8 +543,10 @@ where
         if self.run.is_some() {
             self.supervise(now, sink);
         }
-        if matches!(self.mode, Mode::Goto { .. }) {
-            self.navigate(now, sink);
+        match self.mode {
+            Mode::Goto { .. } => self.navigate(now, sink),
+            Mode::Locate { .. } => self.locate_tick(sink),
+            _ => {}
         }
         match self.mode {
             Mode::Drive { drive: Drive { motion: Motion::Straight(v), .. }, .. }
@@ -551,6 +568,9 @@ where
             }
             Some(0) if matches!(self.mode, Mode::Goto { .. }) => {
                 self.halt("did not get there in time", now, sink);
+            }
+            Some(0) if matches!(self.mode, Mode::Locate { .. }) => {
+                self.end_locate(Err(Failure::OutOfTime), sink);
             }
             Some(0) => {
                 self.mode = Mode::Idle;
@@ -605,7 +625,10 @@ where
     fn current_drive(&self) -> Drive {
         match self.mode {
             Mode::Idle | Mode::Wait { .. } => self.model.stop(),
-            Mode::Drive { drive, .. } | Mode::Calibrate { drive, .. } | Mode::Goto { drive, .. } => drive,
+            Mode::Drive { drive, .. }
+            | Mode::Calibrate { drive, .. }
+            | Mode::Goto { drive, .. }
+            | Mode::Locate { drive, .. } => drive,
             Mode::Servo { left, right, motion, .. } => Drive { left, right, motion, saturated: false },
         }
     }

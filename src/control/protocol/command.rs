@@ -38,7 +38,7 @@ pub enum Command {
         side: Side,
         trim: Trim,
     },
-    /// Sets the pose estimate (`reset` is `pose 0 0 0`).
+    /// Sets the pose estimate.
     SetPose {
         x_mm: i32,
         y_mm: i32,
@@ -75,6 +75,9 @@ pub enum Command {
     },
     /// Sends the on-board log (`dump`).
     Dump,
+    /// Finds where the robot is, turning in place (`locate`, or `reset`;
+    /// see `control::localize`).
+    Locate,
 }
 
 /// What a `mission` command does.
@@ -358,7 +361,8 @@ const KEYWORDS: &[(&str, Keyword)] = &[
     ("servo", Keyword::Servo),
     ("trim", Keyword::Trim),
     ("pose", Keyword::Pose),
-    ("reset", Keyword::Reset),
+    ("locate", Keyword::Locate),
+    ("reset", Keyword::Locate),
     ("cal", Keyword::Calibrate),
     ("calibrate", Keyword::Calibrate),
     ("rate", Keyword::Rate),
@@ -382,7 +386,7 @@ enum Keyword {
     Servo,
     Trim,
     Pose,
-    Reset,
+    Locate,
     Calibrate,
     Rate,
     Status,
@@ -411,7 +415,7 @@ impl Keyword {
             Keyword::Goto => (&[Field::X, Field::Y], None),
             Keyword::Face => (&[Field::Heading], None),
             Keyword::Wait => (&[], DURATION),
-            Keyword::Stop | Keyword::Reset | Keyword::Status | Keyword::Help | Keyword::Dump => (&[], None),
+            Keyword::Stop | Keyword::Locate | Keyword::Status | Keyword::Help | Keyword::Dump => (&[], None),
         }
     }
 }
@@ -479,7 +483,7 @@ pub fn parse(line: &[u8]) -> Result<Command, ParseError> {
             Command::Trim { side: if a == 0 { Side::Left } else { Side::Right }, trim: Trim(centi_to_q8(b) as i16) }
         }
         Keyword::Pose => Command::SetPose { x_mm: a, y_mm: b, heading: Angle::from_millidegrees(c) },
-        Keyword::Reset => Command::SetPose { x_mm: 0, y_mm: 0, heading: Angle::ZERO },
+        Keyword::Locate => Command::Locate,
         Keyword::Calibrate => Command::Calibrate { samples: extra.map_or(compass::CALIBRATION_SAMPLES, |n| n as u16) },
         Keyword::Rate => Command::Rate { hz: a as u16 },
         Keyword::Status => Command::Status,
@@ -619,5 +623,6 @@ pub fn format_command(cmd: &Command, out: &mut dyn TextOut) -> Result<(), Overfl
             push_u32(out, u32::from(hz))
         }
         Command::Dump => push_str(out, "dump"),
+        Command::Locate => push_str(out, "locate"),
     }
 }

@@ -155,7 +155,7 @@ pub const HELP: &[&str] = &[
     "#  servo <l> <r> [<s>]    raw servo commands 0.00..180.00 (90 = stop), no trim",
     "#  trim left|right <steps> servo neutral offset -10.00..10.00",
     "#  pose <x mm> <y mm> <deg> set the pose, |x|,|y| <= 30000, heading -360.000..360.000",
-    "#  reset                  pose 0 0 0",
+    "#  locate (or reset)      find the pose: views of the walls, turning in place",
     "#  cal [<samples>]        magnetometer calibration sweep, 250..10000 samples (default 1000)",
     "#  rate <Hz>              telemetry rows per second 0..100 (0 = off)",
     "#  status | help",

@@ -1,6 +1,6 @@
 //! What the loop is doing: idle, driving, raw servo commands, a
-//! calibration sweep, going somewhere on the estimate, or waiting, each
-//! with its timer.
+//! calibration sweep, going somewhere on the estimate, waiting, or finding
+//! where it is, each with its timer.
 
 use super::clock::Timer;
 use crate::control::goto::{Nav, Target};
@@ -23,6 +23,9 @@ pub enum Mode {
     Goto { nav: Nav, drive: Drive, timer: Timer },
     /// Standing still for a while (`wait`).
     Wait { timer: Timer },
+    /// Finding where it is (`locate`, `control::localize`): `drive` stands
+    /// or turns between views, the timer is the procedure's time limit.
+    Locate { drive: Drive, timer: Timer },
 }
 
 impl Mode {
@@ -36,6 +39,7 @@ impl Mode {
             Mode::Goto { nav: Nav { target: Target::Point { .. }, .. }, .. } => "goto",
             Mode::Goto { .. } => "face",
             Mode::Wait { .. } => "wait",
+            Mode::Locate { .. } => "locate",
         }
     }
     pub(super) fn timer(&self) -> Option<&Timer> {
@@ -45,6 +49,7 @@ impl Mode {
             | Mode::Servo { timer, .. }
             | Mode::Calibrate { timer, .. }
             | Mode::Goto { timer, .. }
+            | Mode::Locate { timer, .. }
             | Mode::Wait { timer } => Some(timer),
         }
     }
@@ -55,6 +60,7 @@ impl Mode {
             | Mode::Servo { timer, .. }
             | Mode::Calibrate { timer, .. }
             | Mode::Goto { timer, .. }
+            | Mode::Locate { timer, .. }
             | Mode::Wait { timer } => Some(timer),
         }
     }

@@ -1,0 +1,117 @@
+//! The loop's side of localization (`control::localize`): the procedure
+//! gets the readings instead of the estimator, drives the body between
+//! views, and its fix starts the estimator; `# located` or `# locate
+//! failed` says how it went.
+
+use super::clock::Timer;
+use super::{Controller, LineSink, Mode};
+use crate::config::locate as cfg;
+use crate::control::log::RowLog;
+use crate::control::protocol::number::{push_fixed_parts, push_i32, push_str, push_u32};
+use crate::driver::{HeadingSensor, MagCalibrate, Servos};
+use crate::math::TurnRate;
+use crate::model::locate::Fix;
+use crate::model::measurement::LidarId;
+use crate::model::Motion;
+
+use crate::control::localize::{Failure, Procedure, Step};
+
+impl<F, R, C, S, L> Controller<F, R, C, S, L>
+where
+    F: crate::driver::RangeSensor,
+    R: crate::driver::RangeSensor,
+    C: HeadingSensor + MagCalibrate,
+    S: Servos,
+    L: RowLog,
+{
+    /// Starts the procedure (`locate`, `reset`, and at power-up): the
+    /// robot stands for its first view.
+    pub(super) fn begin_locate(&mut self) {
+        self.locating = Procedure::new();
+        self.mode = Mode::Locate { drive: self.model.stop(), timer: Timer::new(Some(cfg::TIME_LIMIT_MS)) };
+    }
+
+    /// While locating, this tick's readings go to the procedure's view
+    /// (the estimator starts afresh from its fix).
+    pub(super) fn take_view_readings(&mut self) {
+        let p = &mut self.locating;
+        if let Some(d) = self.pending_front.take() {
+            p.lidar(LidarId::Front, d);
+        }
+        if let Some(d) = self.pending_right.take() {
+            p.lidar(LidarId::Right, d);
+        }
+        if let Some(h) = self.pending_heading.take() {
+            p.heading(h);
+        }
+    }
+
+    /// One tick of the procedure: stand, turn, or its answer.
+    pub(super) fn locate_tick(&mut self, sink: &mut impl LineSink) {
+        let motion = match self.locating.tick(&self.estimator.arena()) {
+            Step::Done(result) => return self.end_locate(result, sink),
+            Step::Stand => Motion::Stop,
+            Step::Turn { clockwise } => {
+                let rate = TurnRate::from_mrad_s(cfg::TURN_MRAD_S);
+                Motion::Turn(if clockwise { rate } else { rate.neg() })
+            }
+        };
+        if let Mode::Locate { drive, .. } = &mut self.mode {
+            if drive.motion != motion {
+                *drive = self.model.drive(motion);
+            }
+        }
+    }
+
+    /// Ends the procedure: a fix starts the estimator there, with its
+    /// uncertainty; a failure leaves the pose with the config's initial
+    /// uncertainty (unknown: `goto` refuses it) until `pose` or `locate`.
+    /// The robot stands.
+    pub(super) fn end_locate(&mut self, result: Result<Fix, Failure>, sink: &mut impl LineSink) {
+        if matches!(self.mode, Mode::Locate { .. }) {
+            self.mode = Mode::Idle;
+        }
+        let views = self.locating.views().len();
+        self.locating = Procedure::new();
+        match result {
+            Ok(fix) => {
+                self.estimator.start_at(&fix);
+                self.dead = fix.pose;
+                self.report_fix(&fix, views, sink);
+            }
+            Err(why) => {
+                self.estimator.reset(self.estimator.pose());
+                self.out.clear();
+                let line = push_str(&mut self.out, "# locate failed: ")
+                    .and_then(|()| push_str(&mut self.out, why.text()))
+                    .and_then(|()| push_str(&mut self.out, "; the pose is unknown until `pose` or `locate`"));
+                if line.is_ok() {
+                    sink.write_line(&self.out);
+                }
+            }
+        }
+    }
+
+    /// `# located x y heading sigma sx sy views n [ambiguous]`: mm, degrees.
+    fn report_fix(&mut self, fix: &Fix, views: usize, sink: &mut impl LineSink) {
+        let mm = |l: crate::math::Length| l.0 >> 16;
+        let o = &mut self.out;
+        o.clear();
+        let line = push_str(o, "# located ")
+            .and_then(|()| push_i32(o, mm(fix.pose.x.to_length())))
+            .and_then(|()| push_str(o, " "))
+            .and_then(|()| push_i32(o, mm(fix.pose.y.to_length())))
+            .and_then(|()| push_str(o, " "))
+            .and_then(|()| push_fixed_parts(o, false, fix.pose.theta.to_millidegrees(), 3))
+            .and_then(|()| push_str(o, " sigma "))
+            .and_then(|()| push_i32(o, mm(fix.sigma_x)))
+            .and_then(|()| push_str(o, " "))
+            .and_then(|()| push_i32(o, mm(fix.sigma_y)))
+            .and_then(|()| push_str(o, " mm, views "))
+            .and_then(|()| push_u32(o, views as u32))
+            .and_then(|()| push_str(o, if fix.ambiguous { ", ambiguous: more than one place fits" } else { "" }));
+        if line.is_ok() {
+            sink.write_line(o);
+        }
+    }
+}
