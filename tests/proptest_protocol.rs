@@ -98,7 +98,7 @@ proptest! {
         words in prop::collection::vec(
             prop_oneof![
                 prop::sample::select(vec![
-                    "fwd", "back", "cw", "ccw", "stop", "servo", "trim", "pose", "reset", "cal", "rate",
+                    "fwd", "back", "cw", "ccw", "stop", "servo", "trim", "pose", "reset", "locate", "cal", "rate",
                     "status", "help", "?", "l", "r", "left", "right", "s", "-", "+", ".", "-.", "1.", "0x10",
                 ]).prop_map(str::to_string),
                 "[-+]?[0-9]{0,11}(\\.[0-9]{0,6})?s?",
