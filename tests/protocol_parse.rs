@@ -532,8 +532,9 @@ fn help_matches_config() {
     }
     assert!(help.contains(&format!("default {}", config::compass::CALIBRATION_SAMPLES)));
     // every keyword of the grammar appears in the help
-    for word in ["fwd", "back", "cw", "ccw", "stop", "servo", "trim", "pose", "reset", "cal", "rate", "status", "help"]
-    {
+    for word in [
+        "fwd", "back", "cw", "ccw", "stop", "servo", "trim", "pose", "reset", "locate", "cal", "rate", "status", "help",
+    ] {
         assert!(help.contains(word), "{word}");
         assert_ne!(parse(word.as_bytes()), Err(ParseError::UnknownCommand), "{word}");
     }
