@@ -483,9 +483,9 @@ fn random_commands_round_trip() {
 #[test]
 fn random_lines_never_panic() {
     let alphabet: &[&[u8]] = &[
-        b"fwd", b"back", b"cw", b"ccw", b"stop", b"servo", b"trim", b"pose", b"reset", b"cal", b"rate", b"status",
-        b"help", b"l", b"right", b" ", b" ", b"\t", b"0", b"1", b"9", b".", b"-", b"+", b"s", b"\r", b"\xff", b"e",
-        b"180", b"60", b"0.5", b"00000",
+        b"fwd", b"back", b"cw", b"ccw", b"stop", b"servo", b"trim", b"pose", b"reset", b"locate", b"cal", b"rate",
+        b"status", b"help", b"l", b"right", b" ", b" ", b"\t", b"0", b"1", b"9", b".", b"-", b"+", b"s", b"\r",
+        b"\xff", b"e", b"180", b"60", b"0.5", b"00000",
     ];
     let mut rng = Rng::new(99);
     let mut accepted = 0;
