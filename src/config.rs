@@ -491,6 +491,11 @@ pub mod locate {
     /// `tests/data/lab2/drive1.csv`, is fitted by no pose within 10 degrees
     /// of its first reading; the box is only roughly aligned with north).
     pub const HEADING_STEPS: u8 = 12;
+    /// A reading whose beam would meet its wall past this incidence, at a
+    /// point the search tries, says nothing about that point, degrees:
+    /// glancing readings fail or come back as spurious echoes (the lab 2
+    /// README; the simulator's `sim::GLANCING_DEG` onset, where half fail).
+    pub const GLANCING_DEG: f64 = 75.0;
     /// Readings averaged before the search, per lidar: five lidar periods
     /// (0.17 s) take the lidar's 1.6 mm spread below 1 mm.
     pub const LIDAR_READINGS: u8 = 5;

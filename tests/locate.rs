@@ -209,12 +209,14 @@ fn the_search_finds_the_pose_from_random_starts() {
         one.add(locate(&Arena::DEFAULT, &[r]).ok(), &truth);
     }
     one.print("locate, one view", starts);
-    // One snapshot (a heading and two ranges) reaches 57 % with the lidars'
-    // cones: half the poses have both cones on walls of one axis, and those
-    // fixes are reported ambiguous (turning in place for more views,
-    // above, settles most). What this asserts is that level and that wrong
-    // fixes are almost always flagged.
-    assert!(one.right * 100 >= starts * 55, "{} of {starts}", one.right);
+    // One snapshot (a heading and two ranges) is right from 37 % of the
+    // starts: half the poses have both cones on walls of one axis, and a
+    // reading that would be glancing at a point says nothing about it
+    // (`config::locate::GLANCING_DEG`), so those fixes are reported
+    // ambiguous (turning in place for more views, above, settles them).
+    // What this asserts is that level and that wrong fixes are almost
+    // always flagged.
+    assert!(one.right * 100 >= starts * 35, "{} of {starts}", one.right);
     assert!(one.wrong_unflagged.len() * 100 <= starts * 3, "{} wrong fixes not flagged", one.wrong_unflagged.len());
 }
 

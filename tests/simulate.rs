@@ -67,7 +67,14 @@ fn the_default_script_is_valid_and_lasts_the_duration() {
 // ---- exact runs against the f64 reference ----------------------------
 
 fn exact(kinematics: Kinematics, start: PoseF64) -> SimRobot {
-    SimRobot::new(SimConfig { noise: Noise::OFF, kinematics, start, realism: Realism::IDEAL, ..SimConfig::default() })
+    SimRobot::new(SimConfig {
+        noise: Noise::OFF,
+        kinematics,
+        start,
+        realism: Realism::IDEAL,
+        locate_at_power_up: false,
+        ..SimConfig::default()
+    })
 }
 
 /// The model's motion for a `fwd`/`cw` request (what the loop drives).
@@ -162,7 +169,8 @@ fn lidars_and_compass_read_the_true_pose_through_the_fake_chips() {
     let start = PoseF64::new(300.0, 150.0, 30f64.to_radians());
     // thin rays, no disturbance: the readings are the ray's (the cone's are
     // tested in sim::realism's tests)
-    let mut robot = SimRobot::new(SimConfig { start, realism: Realism::IDEAL, ..SimConfig::default() });
+    let mut robot =
+        SimRobot::new(SimConfig { start, realism: Realism::IDEAL, locate_at_power_up: false, ..SimConfig::default() });
     robot.send("rate 0");
     let a = robot.cfg.arena;
     let (mut fronts, mut rights, mut headings) = (vec![], vec![], vec![]);
@@ -204,7 +212,7 @@ fn lidars_and_compass_read_the_true_pose_through_the_fake_chips() {
 
 #[test]
 fn the_default_minute_drives_laps_without_touching_a_wall() {
-    let mut robot = SimRobot::new(SimConfig::default());
+    let mut robot = SimRobot::new(SimConfig { locate_at_power_up: false, ..SimConfig::default() });
     let script = Script::parse(&default_script(60.0)).unwrap();
     let mut rows = 0;
     let mut errors = vec![];
@@ -233,7 +241,7 @@ fn the_default_minute_drives_laps_without_touching_a_wall() {
 #[test]
 fn the_same_seed_gives_the_same_run_and_another_seed_another() {
     let run = |seed: u64| {
-        let mut robot = SimRobot::new(SimConfig { seed, ..SimConfig::default() });
+        let mut robot = SimRobot::new(SimConfig { seed, locate_at_power_up: false, ..SimConfig::default() });
         let script = Script::parse(&default_script(5.0)).unwrap();
         let mut lines = vec![];
         robot.run_script(&script, 5_000_000, 10, |l| lines.push(l.to_string()));
@@ -245,7 +253,7 @@ fn the_same_seed_gives_the_same_run_and_another_seed_another() {
 
 #[test]
 fn a_lidar_pulled_out_is_counted_and_brought_back_after_the_back_off() {
-    let mut robot = SimRobot::new(SimConfig::default());
+    let mut robot = SimRobot::new(SimConfig { locate_at_power_up: false, ..SimConfig::default() });
     robot.send("rate 0");
     for _ in 0..20 {
         robot.tick();
@@ -272,7 +280,7 @@ fn a_lidar_pulled_out_is_counted_and_brought_back_after_the_back_off() {
 
 #[test]
 fn bytes_in_lines_out_one_tick_at_a_time() {
-    let mut robot = SimRobot::new(SimConfig::default());
+    let mut robot = SimRobot::new(SimConfig { locate_at_power_up: false, ..SimConfig::default() });
     for b in b"rate 0\nfwd 0.13\n" {
         robot.feed(*b);
     }
@@ -294,7 +302,7 @@ fn bytes_in_lines_out_one_tick_at_a_time() {
 /// Runs `cal` (with `args`) on a simulated robot until it answers; returns
 /// the lines after the `# ok`.
 fn calibrate(seed: u64, noise: Noise, command: &str) -> Vec<String> {
-    let mut robot = SimRobot::new(SimConfig { seed, noise, ..SimConfig::default() });
+    let mut robot = SimRobot::new(SimConfig { seed, noise, locate_at_power_up: false, ..SimConfig::default() });
     robot.send("rate 0");
     robot.send(command);
     let samples = command.strip_prefix("cal").unwrap().trim().parse().unwrap_or(config::compass::CALIBRATION_SAMPLES);
@@ -350,7 +358,7 @@ fn cal_in_the_simulator_recovers_the_simulated_distortion() {
 
 #[test]
 fn a_turn_in_the_simulator_leaves_z_alone() {
-    let mut robot = SimRobot::new(SimConfig::default());
+    let mut robot = SimRobot::new(SimConfig { locate_at_power_up: false, ..SimConfig::default() });
     robot.send("rate 0");
     let mut fields = Vec::new();
     for k in 0..300 {

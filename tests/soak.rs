@@ -25,7 +25,12 @@ fn ticks() -> u64 {
 fn a_million_ticks_of_random_commands() {
     let n = ticks();
     let start = std::time::Instant::now();
-    let mut robot = SimRobot::new(SimConfig { seed: 11, realism: Realism::IDEAL, ..SimConfig::default() });
+    let mut robot = SimRobot::new(SimConfig {
+        seed: 11,
+        realism: Realism::IDEAL,
+        locate_at_power_up: false,
+        ..SimConfig::default()
+    });
     let mut rng = Rng::new(0x50A4);
     let mut w = Watcher::default();
     let mut next_command = 0u64;
@@ -131,7 +136,13 @@ fn lost_heading_is_recovered() {
         // front lidar's cone meets that wall first, grazing, and x is not
         // observable until the robot moves
         let start = paperbot::sim::body::PoseF64::new(380.0, 250.0, 0.0);
-        let mut robot = SimRobot::new(SimConfig { seed: 3, start, realism: Realism::IDEAL, ..SimConfig::default() });
+        let mut robot = SimRobot::new(SimConfig {
+            seed: 3,
+            start,
+            realism: Realism::IDEAL,
+            locate_at_power_up: false,
+            ..SimConfig::default()
+        });
         for _ in 0..100 {
             robot.tick();
         }

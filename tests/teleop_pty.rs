@@ -43,7 +43,7 @@ fn drive(
     opts: LineModeOptions,
     streaming_hz: Option<u16>,
 ) -> (LineModeReport, String, Vec<Sample>, Option<String>, Server) {
-    let cfg = SimConfig { noise: Noise::OFF, ..SimConfig::default() };
+    let cfg = SimConfig { noise: Noise::OFF, locate_at_power_up: false, ..SimConfig::default() };
     let (mut master, slave) = TTYPort::pair().expect("a pseudo-terminal");
     master.set_timeout(Duration::ZERO).expect("non-blocking master");
     let path = slave.name().expect("the PTY's path");
@@ -289,7 +289,8 @@ fn check_lines(bytes: &[u8]) -> usize {
 
 #[test]
 fn server_answers_with_crlf_lines_like_the_firmware() {
-    let mut server = Server::new(SimRobot::new(SimConfig { noise: Noise::OFF, ..SimConfig::default() }));
+    let mut server =
+        Server::new(SimRobot::new(SimConfig { noise: Noise::OFF, locate_at_power_up: false, ..SimConfig::default() }));
     let mut port =
         FakePort { input: b"status\nfwd 0.5\n".iter().copied().collect(), output: Vec::new(), room: 1 << 20 };
     server.step(&mut port).unwrap();
@@ -304,7 +305,8 @@ fn server_answers_with_crlf_lines_like_the_firmware() {
 
 #[test]
 fn server_output_nobody_reads_is_bounded_and_dropped_in_whole_lines() {
-    let mut server = Server::new(SimRobot::new(SimConfig { noise: Noise::OFF, ..SimConfig::default() }));
+    let mut server =
+        Server::new(SimRobot::new(SimConfig { noise: Noise::OFF, locate_at_power_up: false, ..SimConfig::default() }));
     let mut port = FakePort { input: b"rate 100\n".iter().copied().collect(), output: Vec::new(), room: 0 };
     // a row per tick, about 100 bytes: MAX_PENDING fills in well under 1000 ticks
     for _ in 0..1000 {

@@ -13,7 +13,12 @@ use paperbot::sim::robot::{SimConfig, SimRobot};
 const TICKS_PER_S: u64 = 1_000_000 / paperbot::control::TICK_US as u64;
 
 fn robot(x: f64, y: f64, deg: f64, seed: u64) -> SimRobot {
-    let cfg = SimConfig { start: PoseF64::new(x, y, deg.to_radians()), seed, ..SimConfig::default() };
+    let cfg = SimConfig {
+        start: PoseF64::new(x, y, deg.to_radians()),
+        seed,
+        locate_at_power_up: false,
+        ..SimConfig::default()
+    };
     let mut r = SimRobot::new(cfg);
     r.send("rate 0");
     r.take_output();

@@ -54,9 +54,7 @@ mod robot {
     use paperbot::driver::lidar::{bring_up, Lidar};
     use paperbot::driver::servo::ServoPair;
     use paperbot::driver::HeadingSensor as _;
-    use paperbot::math::Angle;
     use paperbot::model::measurement::Arena;
-    use paperbot::model::Pose;
 
     const CYCLES_PER_MS: u32 = config::board::CPU_HZ / 1_000;
     /// The loop period in CPU cycles.
@@ -106,7 +104,7 @@ mod robot {
         let servos = ServoPair::with_config(servo_timer.output());
         // SAFETY: `run` is entered once (main never returns): the only reference to LOG
         let log = unsafe { &mut *core::ptr::addr_of_mut!(LOG) };
-        let start = Pose::from_mm(0, 0, Angle::ZERO);
+        let start = Arena::DEFAULT.centre();
         let mut ctl = Controller::with_log(front, right, compass, servos, start, Arena::DEFAULT, log);
         // a mission uploaded before a reset (RTC memory; not after power-off)
         let mut store = RtcMissionStore;
@@ -121,6 +119,9 @@ mod robot {
         let mut last_tick = Ccount.now();
         let mut last_blink = last_tick;
         start_watchdog(&mut watchdog);
+        if config::locate::AT_POWER_UP {
+            ctl.power_up(&mut UartLines(&mut serial));
+        }
         loop {
             watchdog.feed();
             let now = Ccount.now();

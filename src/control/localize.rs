@@ -3,9 +3,10 @@
 //! place between them, and the search of the box for the poses that
 //! explain them ([`crate::model::locate`]), a few grid columns per tick.
 //!
-//! 1. A view: the compass's heading and each lidar's distance, the means of
-//!    [`cfg::COMPASS_READINGS`] and [`cfg::LIDAR_READINGS`] readings taken
-//!    standing (at most [`cfg::VIEW_LIMIT_MS`]).
+//! 1. A view: the compass's heading, the mean of [`cfg::COMPASS_READINGS`]
+//!    readings, and each lidar's distance, the median of
+//!    [`cfg::LIDAR_READINGS`], taken standing (at most
+//!    [`cfg::VIEW_LIMIT_MS`]).
 //! 2. A turn in place of [`cfg::TURN_DEG`], clockwise first, a settle of
 //!    [`cfg::SETTLE_MS`], and the next view. When the compass shows that a
 //!    turn moved less than [`cfg::BLOCKED_TURN_DEG`] (the body against a
@@ -82,7 +83,7 @@ pub enum Step {
 /// Where the procedure is.
 // one phase at a time, in a static on the robot: no box (no allocator)
 #[allow(clippy::large_enum_variant)]
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 enum Phase {
     /// Taking a view's readings.
     View,
@@ -91,11 +92,14 @@ enum Phase {
     Search(Search),
 }
 
-/// A view's readings as they come: sums and counts.
-#[derive(Clone, Copy, Default, Debug)]
+/// One lidar's distances in a view.
+type Distances = heapless::Vec<Length, { cfg::LIDAR_READINGS as usize }>;
+
+/// A view's readings as they come.
+#[derive(Clone, Default, Debug)]
 struct ViewSums {
-    front: (i64, u8),
-    right: (i64, u8),
+    front: Distances,
+    right: Distances,
     /// The first heading, and the sum of the others' differences from it
     /// (a mean that does not wrap at north).
     first_heading: Option<Angle>,
@@ -105,22 +109,27 @@ struct ViewSums {
 
 impl ViewSums {
     fn complete(&self) -> bool {
-        self.front.1 >= cfg::LIDAR_READINGS
-            && self.right.1 >= cfg::LIDAR_READINGS
-            && self.headings >= cfg::COMPASS_READINGS
+        self.front.is_full() && self.right.is_full() && self.headings >= cfg::COMPASS_READINGS
     }
 
-    /// The view: the means (`None`: no compass heading).
-    fn readings(&self) -> Option<Readings> {
-        let mean = |(sum, n): (i64, u8)| div_i64(sum, i64::from(n)).map(|m| Length(m as i32));
+    /// The view: the lidars' medians (a glancing beam's spurious echo
+    /// among them does not move it) and the compass's mean (`None`: no
+    /// compass heading).
+    fn readings(&mut self) -> Option<Readings> {
         let first = self.first_heading?;
         let diff = div_i64(self.heading_diffs, i64::from(self.headings)).unwrap_or(0);
         Some(Readings {
             heading: first.wrapping_add(Angle(diff as u32)),
-            front: mean(self.front),
-            right: mean(self.right),
+            front: median(&mut self.front),
+            right: median(&mut self.right),
         })
     }
+}
+
+/// The middle of `d` (the lower of the two middles of an even count).
+fn median(d: &mut Distances) -> Option<Length> {
+    d.sort_unstable();
+    d.get(d.len().saturating_sub(1) / 2).copied()
 }
 
 /// Loop ticks in `ms` (whole ticks, rounded down; const-evaluated).
@@ -138,7 +147,7 @@ const BLOCKED: i32 = (cfg::BLOCKED_TURN_DEG as i64 * (1 << 32) / 360) as i32;
 const _: () = assert!(cfg::MIN_VIEWS >= 1 && cfg::MIN_VIEWS <= MAX_VIEWS && TURN_TICKS > 0);
 
 /// The procedure (see the module docs).
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct Procedure {
     views: [Readings; MAX_VIEWS],
     count: usize,
@@ -164,7 +173,13 @@ impl Procedure {
             phase: Phase::View,
             ticks: 0,
             clockwise: true,
-            view: ViewSums { front: (0, 0), right: (0, 0), first_heading: None, heading_diffs: 0, headings: 0 },
+            view: ViewSums {
+                front: heapless::Vec::new(),
+                right: heapless::Vec::new(),
+                first_heading: None,
+                heading_diffs: 0,
+                headings: 0,
+            },
         }
     }
 
@@ -176,13 +191,13 @@ impl Procedure {
     /// A lidar's distance (the lidar model's output); kept while a view is
     /// being taken, up to [`cfg::LIDAR_READINGS`].
     pub fn lidar(&mut self, id: LidarId, d: Length) {
-        let (sum, n) = match id {
+        let distances = match id {
             LidarId::Front => &mut self.view.front,
             LidarId::Right => &mut self.view.right,
         };
-        if matches!(self.phase, Phase::View) && *n < cfg::LIDAR_READINGS {
-            *sum = sum.saturating_add(i64::from(d.0));
-            *n = n.saturating_add(1);
+        if matches!(self.phase, Phase::View) {
+            // a full view keeps its first readings
+            let _ = distances.push(d);
         }
     }
 

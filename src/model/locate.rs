@@ -44,6 +44,10 @@ use crate::math::{isqrt64, mul_q30, Angle, Coord, Length};
 use crate::model::measurement::{Arena, Beam, LidarId};
 use crate::model::state::Pose;
 
+/// `cos` of [`cfg::GLANCING_DEG`], Q2.30.
+const GLANCING_NORMAL: i32 =
+    (crate::math::cos_f64(cfg::GLANCING_DEG * core::f64::consts::TAU / 360.0) * (1u32 << 30) as f64) as i32;
+
 /// Grid points per axis at most (a 2 m box at 5 mm).
 pub const MAX_STEPS: i32 = 400;
 
@@ -283,7 +287,10 @@ impl View {
             None => true,
             Some(z) => {
                 let beam = Beam::new(arena, &pose, &id.mount());
-                beam.normal_miss(z).0.saturating_abs() <= mul_q30(self.tol.0, beam.cone_normal)
+                // a beam this glancing may fail or lie: its reading says
+                // nothing about this point
+                !beam.square_enough(GLANCING_NORMAL)
+                    || beam.normal_miss(z).0.saturating_abs() <= mul_q30(self.tol.0, beam.cone_normal)
             }
         };
         Some(u32::from(!fits(LidarId::Front, self.front)) + u32::from(!fits(LidarId::Right, self.right)))

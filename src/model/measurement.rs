@@ -56,6 +56,13 @@ pub struct Arena {
 impl Arena {
     /// The team's box from the config (762.5 x 495 mm).
     pub const DEFAULT: Arena = Arena { length_x: config::arena::LENGTH_X, width_y: config::arena::WIDTH_Y };
+
+    /// Its centre, facing north: where a robot that does not know where it
+    /// is starts (with the estimator's initial uncertainty).
+    pub fn centre(&self) -> crate::model::state::Pose {
+        let half = |l: Length| crate::math::Coord::from_length(Length(l.0 / 2));
+        crate::model::state::Pose::new(half(self.length_x), half(self.width_y), crate::math::Angle::ZERO)
+    }
 }
 
 impl Default for Arena {

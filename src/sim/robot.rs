@@ -97,8 +97,13 @@ impl Default for Noise {
 #[derive(Clone, Copy, PartialEq, Debug)]
 pub struct SimConfig {
     pub arena: Arena,
-    /// The true start pose; the firmware starts believing it too.
+    /// The true start pose.
     pub start: PoseF64,
+    /// The firmware powers up as on the robot: at the box's centre, not
+    /// knowing where it is, and localizes
+    /// ([`crate::config::locate::AT_POWER_UP`]). False: it starts
+    /// believing `start` (a test that needs a known start).
+    pub locate_at_power_up: bool,
     pub seed: u64,
     pub noise: Noise,
     pub kinematics: Kinematics,
@@ -116,6 +121,7 @@ impl Default for SimConfig {
                 config::sim::START_Y_MM,
                 config::sim::START_HEADING_DEG.to_radians(),
             ),
+            locate_at_power_up: config::locate::AT_POWER_UP,
             seed: 1,
             noise: Noise::default(),
             kinematics: Kinematics::default(),
@@ -182,15 +188,13 @@ impl SimRobot {
             length_x: Length::from_mm_f64(cfg.arena.length_x),
             width_y: Length::from_mm_f64(cfg.arena.width_y),
         };
-        let ctl = Controller::with_log(
-            front,
-            right,
-            compass,
-            SimServos::default(),
-            cfg.start.to_pose(),
-            arena,
-            RingLog::new(),
-        );
+        let believed = if cfg.locate_at_power_up { arena.centre() } else { cfg.start.to_pose() };
+        let mut ctl =
+            Controller::with_log(front, right, compass, SimServos::default(), believed, arena, RingLog::new());
+        let mut out = Collect::default();
+        if cfg.locate_at_power_up {
+            ctl.power_up(&mut out);
+        }
         let next_tick_ns = sensors.clock.now_ns();
         SimRobot {
             cfg,
@@ -198,7 +202,7 @@ impl SimRobot {
             ctl,
             truth: cfg.start,
             rng,
-            out: Collect::default(),
+            out,
             next_tick_ns,
             collisions: 0,
             trial: Trial::NONE,

@@ -24,6 +24,14 @@ where
     S: Servos,
     L: RowLog,
 {
+    /// The power-up localization ([`cfg::AT_POWER_UP`]): `locate` as if
+    /// typed (`# ok locate`). The firmware and the simulator call it once
+    /// the sensors are up, with the loop started at the arena's centre
+    /// ([`crate::model::measurement::Arena::centre`]).
+    pub fn power_up(&mut self, sink: &mut impl LineSink) {
+        self.handle(crate::control::protocol::Command::Locate, sink);
+    }
+
     /// Starts the procedure (`locate`, `reset`, and at power-up): the
     /// robot stands for its first view.
     pub(super) fn begin_locate(&mut self) {

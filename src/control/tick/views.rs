@@ -32,6 +32,10 @@ impl<F, R, C, S, L> Controller<F, R, C, S, L> {
     pub fn mode(&self) -> Mode {
         self.mode
     }
+    /// The localization procedure (its views so far while locating).
+    pub fn locating(&self) -> &crate::control::localize::Procedure {
+        &self.locating
+    }
     /// The servo commands and motion set at the last tick.
     pub fn applied(&self) -> Drive {
         self.applied
