@@ -210,20 +210,27 @@ fn lidars_and_compass_read_the_true_pose_through_the_fake_chips() {
 
 // ---- runs with noise --------------------------------------------------
 
+/// The main job: power-up localization, then laps by `goto`.
 #[test]
-fn the_default_minute_drives_laps_without_touching_a_wall() {
-    let mut robot = SimRobot::new(SimConfig { locate_at_power_up: false, ..SimConfig::default() });
+fn the_default_minute_locates_then_drives_laps_without_touching_a_wall() {
+    let mut robot = SimRobot::new(SimConfig::default());
+    assert_eq!(robot.take_output(), ["# ok locate"]);
     let script = Script::parse(&default_script(60.0)).unwrap();
     let mut rows = 0;
     let mut errors = vec![];
+    let mut located = vec![];
     let samples = robot.run_script(&script, 60_000_000, 10, |l| {
-        if l.starts_with("# err") {
+        if l.starts_with("# locate") {
+            located.push(l.to_string());
+        }
+        if l.starts_with("# err") || l.starts_with("# locate failed") {
             errors.push(l.to_string());
         } else if !l.starts_with('#') && !l.starts_with("t_ms") {
             rows += 1;
         }
     });
     assert!(errors.is_empty(), "{errors:?}");
+    assert_eq!(located.len(), 1, "{located:?}");
     assert_eq!(rows, 600, "10 Hz telemetry for 60 s");
     assert_eq!(robot.collisions(), 0);
     let a = robot.cfg.arena;
