@@ -8,6 +8,7 @@
 //!   --duration S       seconds of robot time (default 60)
 //!   --arena LxW        arena size in mm, x (north) by y (east) (default 762.5x495)
 //!   --start X,Y,DEG    true start pose (default from config::sim)
+//!   --known-start      the firmware starts believing the start pose (default: it localizes at power-up)
 //!   --seed N           noise seed (default 1)
 //!   --no-noise         exact run: no motion, lidar or compass noise
 //!   --kinematics K     rigid (default) or report (the report's turn equations)
@@ -77,6 +78,7 @@ fn parse_args() -> Result<Option<Args>, String> {
                 a.cfg.arena = Arena::new(l, w);
             }
             "--start" => start = Some(value("--start")?),
+            "--known-start" => a.cfg.locate_at_power_up = false,
             "--seed" => a.cfg.seed = value("--seed")?.parse().map_err(|_| "--seed wants an integer")?,
             "--no-noise" => a.cfg.noise = Noise::OFF,
             "--kinematics" => {
@@ -130,7 +132,7 @@ fn parse_args() -> Result<Option<Args>, String> {
 
 fn usage() -> String {
     let doc = include_str!("simulate.rs");
-    doc.lines().skip(5).take(18).map(|l| l.trim_start_matches("//! ")).collect::<Vec<_>>().join("\n")
+    doc.lines().skip(5).take(19).map(|l| l.trim_start_matches("//! ")).collect::<Vec<_>>().join("\n")
 }
 
 fn main() -> ExitCode {
@@ -189,8 +191,12 @@ fn main() -> ExitCode {
     let elapsed = wall.elapsed();
 
     let truth: Vec<PoseF64> = samples.iter().map(|s| s.truth).collect();
-    let est: Vec<PoseF64> = samples.iter().map(|s| s.estimate).collect();
-    let dead: Vec<PoseF64> = samples.iter().map(|s| s.dead_reckoned).collect();
+    // the firmware's poses from its power-up localization's fix on (before
+    // it, it does not know where it is)
+    let located = samples.iter().position(|s| !s.locating).unwrap_or(samples.len());
+    let since_fix = samples.get(located..).unwrap_or(&[]);
+    let est: Vec<PoseF64> = since_fix.iter().map(|s| s.estimate).collect();
+    let dead: Vec<PoseF64> = since_fix.iter().map(|s| s.dead_reckoned).collect();
     let title = format!("paperbot simulation: {:.1} s, seed {}", args.duration_s, args.cfg.seed);
     let svg = render(
         &args.cfg.arena,
@@ -221,7 +227,11 @@ fn main() -> ExitCode {
         elapsed.as_secs_f64(),
         args.out
     );
-    let samples: Vec<Compared> = samples
+    if located > 0 {
+        let t_s = since_fix.first().map_or(args.duration_s, |s| s.t_us as f64 * 1e-6);
+        eprintln!("  located at power-up after {t_s:.2} s; the errors over the run count from there");
+    }
+    let samples: Vec<Compared> = since_fix
         .iter()
         .map(|s| Compared { truth: s.truth, estimate: s.estimate, dead_reckoned: s.dead_reckoned })
         .collect();

@@ -149,6 +149,8 @@ pub struct Sample {
     pub estimate: PoseF64,
     /// The firmware's dead-reckoned pose (state update alone).
     pub dead_reckoned: PoseF64,
+    /// The firmware is localizing (its pose is not an estimate yet).
+    pub locating: bool,
 }
 
 /// The simulated robot (see the module docs).
@@ -312,6 +314,7 @@ impl SimRobot {
             truth: self.truth,
             estimate: PoseF64::from_pose(&self.ctl.pose()),
             dead_reckoned: PoseF64::from_pose(&self.ctl.dead_reckoned()),
+            locating: matches!(self.ctl.mode(), crate::control::Mode::Locate { .. }),
         }
     }
 
