@@ -182,19 +182,8 @@ fn recover(truth: TruePose, start: Pose, settled: bool, seed: u64) -> (Option<f6
     let mut rng = Rng::new(seed);
     let (lx, wy) = estimator_support::arena_mm();
     let (lx, wy) = (lx.to_mm_f64(), wy.to_mm_f64());
-    let mut est = Estimator::new(start);
-    if settled {
-        // sure of itself at the wrong pose: its own readings for 2 s
-        for _ in 0..200 {
-            est.predict(Motion::Stop, TICK);
-            for id in [LidarId::Front, LidarId::Right] {
-                if let Some(z) = expected_lidar(&Arena::DEFAULT, &start, id) {
-                    est.update_lidar(id, z);
-                }
-            }
-            est.update_heading(start.theta);
-        }
-    }
+    // sure of itself at the wrong pose, or just started there
+    let mut est = if settled { estimator_support::settled(start) } else { Estimator::new(start) };
     let before = est.stats();
     let (mut back_at, mut worst, mut longest) = (None, 0.0f64, 0.0f64);
     for tick in 0..500 {
