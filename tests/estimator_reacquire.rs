@@ -3,6 +3,8 @@
 //! shorter runs stay rejected); readings no position in the arena could give
 //! never do; the position never leaves the arena by more than `ARENA_MARGIN`.
 
+mod estimator_support;
+
 use paperbot::config::arena;
 use paperbot::config::estimator::{ARENA_MARGIN, REACQUIRE_AFTER};
 use paperbot::math::{Angle, Dt, Length, Speed};
@@ -19,16 +21,7 @@ fn deg(d: f64) -> Angle {
 /// An estimator that has settled at `truth` (2 s of exact readings), so its
 /// gate is narrow: a few mm, a degree.
 fn settled(truth: Pose) -> Estimator {
-    let mut est = Estimator::new(truth);
-    for _ in 0..200 {
-        est.predict(Motion::Stop, TICK);
-        for id in [LidarId::Front, LidarId::Right] {
-            if let Some(z) = expected_lidar(&Arena::DEFAULT, &truth, id) {
-                est.update_lidar(id, z);
-            }
-        }
-        est.update_heading(truth.theta);
-    }
+    let est = estimator_support::settled(truth);
     let s = est.sigma();
     assert!(
         s.x.to_mm_f64() < 3.0 && s.y.to_mm_f64() < 3.0 && f64::from(s.theta.0) * 360.0 / 4_294_967_296.0 < 1.5,

@@ -367,3 +367,22 @@ pub fn replay_log(res: &RunResult) -> String {
     }
     s
 }
+
+/// An estimator sure of itself at `at`: started there and fed 2 s of the
+/// exact readings its own arena model gives there (both lidars and the
+/// compass every 10 ms tick), standing still.
+pub fn settled(at: Pose) -> Estimator {
+    let tick = Dt::from_micros_saturating(10_000);
+    let arena = paperbot::model::measurement::Arena::DEFAULT;
+    let mut est = Estimator::new(at);
+    for _ in 0..200 {
+        est.predict(Motion::Stop, tick);
+        for id in [LidarId::Front, LidarId::Right] {
+            if let Some(z) = paperbot::model::measurement::expected_lidar(&arena, &at, id) {
+                est.update_lidar(id, z);
+            }
+        }
+        est.update_heading(at.theta);
+    }
+    est
+}

@@ -59,6 +59,8 @@ pub(super) const FLOOR_HEADING: u32 = {
 /// D / L in Q31 (D < 128 mm by the config's assert, so D / L < 1/2).
 pub(super) const D_OVER_L_Q31: i32 = to_i32(geometry::ROTATION_TO_REFERENCE.0 as f64 / 65536.0 / L * 2_147_483_648.0);
 pub(super) const P_MAX: i32 = to_i32(cfg::MAX_VARIANCE_MM2 * Q14);
+/// A lidar's re-acquisition's position variance, Q14 mm^2.
+pub(super) const P_REACQUIRE: i32 = to_i32(cfg::REACQUIRE_SIGMA_MM * cfg::REACQUIRE_SIGMA_MM * Q14);
 pub(super) const P_MIN: i32 = to_i32(cfg::MIN_VARIANCE_MM2 * Q14);
 pub(super) const P0_POS: i32 = to_i32(cfg::INITIAL_SIGMA_MM * cfg::INITIAL_SIGMA_MM * Q14);
 pub(super) const P0_HEADING: i32 = {
@@ -84,6 +86,7 @@ const _: () = {
     assert!(MIN_NORMAL > (1 << 28) && MIN_NORMAL <= (1 << 30));
     assert!(P_MIN > 0 && P_MIN < P_MAX && P_MAX <= (1 << 30));
     assert!(P0_POS <= P_MAX && P0_HEADING <= P_MAX);
+    assert!(P_REACQUIRE > P_MIN && P_REACQUIRE <= P_MAX);
     assert!(K_DIST > 0 && K_DRIFT > 0 && K_TURN > 0 && K_TURN_POS >= K_TURN && K_TURN_POS < (1 << 30));
     // floor * dt must fit u32 for dt <= 65535 us
     assert!((FLOOR_POS as u64) * 65_535 < (1 << 32) && (FLOOR_HEADING as u64) * 65_535 < (1 << 32));

@@ -2,24 +2,19 @@
 //! Kalman update, with the innovation gate and re-acquisition (see the
 //! module docs of [`super`]).
 
-use super::constants::{GATE_SQ_Q8, LSB_PER_TILDE_MM_Q9, MIN_NORMAL, P_MAX, R_COMPASS, R_LIDAR, TILDE_Q16_PER_LSB};
+use super::constants::{
+    GATE_SQ_Q8, LSB_PER_TILDE_MM_Q9, MIN_NORMAL, P_MAX, P_REACQUIRE, R_COMPASS, R_LIDAR, TILDE_Q16_PER_LSB,
+};
 use super::covariance::{remove, Covariance};
 use super::{Estimator, SensorStats, Update};
 use crate::config::estimator as cfg;
-use crate::math::{mul_hi, mul_hi_u, mul_q30, mul_q30_unsat, mul_wide, normalize, reciprocal, shift, Angle, Coord};
+use crate::math::{
+    isqrt64, mul_hi, mul_hi_u, mul_q30, mul_q30_unsat, mul_wide, normalize, reciprocal, shift, Angle, Coord,
+};
 
 /// 1 in Q2.30.
 const ONE: i32 = 1 << 30;
 use crate::model::measurement::{Beam, LidarId, Wall};
-
-/// Whether [`Estimator::correct`] applies the innovation gate.
-#[derive(Clone, Copy, PartialEq, Eq)]
-enum Gate {
-    On,
-    /// Re-acquiring: the covariance has just been re-inflated and the
-    /// reading is used whatever its innovation.
-    Off,
-}
 
 /// One row of `H` for a scalar measurement: `sign` times a unit on x or y
 /// (or nothing), plus `theta` (Q16, per mm of `L dtheta`) on the heading.
@@ -68,7 +63,7 @@ impl Estimator {
                 let n2 = mul_hi(beam.cone_normal, beam.cone_normal) << 2; // <= 2^30
                 mul_q30_unsat(R_LIDAR, n2).max(1)
             };
-            match self.correct(row, nu.0, r, Gate::On) {
+            match self.correct(row, nu.0, r) {
                 Update::Accepted => {
                     *self.run_of(which) = 0;
                     Update::Accepted
@@ -119,25 +114,36 @@ impl Estimator {
         }
         *run = 0;
         // The position is what is in doubt (the heading has the compass),
-        // on both axes: the beam may meet another wall than the estimate thinks.
+        // on both axes: the beam may meet another wall than the estimate
+        // thinks. Its variances grow to the re-acquisition's (never shrink).
         let q = &mut self.p;
-        (q.xx, q.yy, q.xy, q.xt, q.yt) = (P_MAX, P_MAX, 0, 0, 0);
+        (q.xx, q.yy, q.xy, q.xt, q.yt) = (q.xx.max(P_REACQUIRE), q.yy.max(P_REACQUIRE), 0, 0, 0);
         let st = self.stats_of(which);
         st.reacquired = st.reacquired.saturating_add(1);
-        self.correct_ungated(row, nu.0, r)
+        self.correct_clipped(row, nu.0, r)
     }
 
-    /// [`Estimator::correct`] without the gate (re-acquisition only).
+    /// [`Estimator::correct`] with the innovation clipped to the gate,
+    /// `nu_used = sign(nu) min(|nu|, gate sqrt(S))` (re-acquisition only):
+    /// the reading then passes the gate, and the step `K nu_used` obeys
+    /// `step^T P^-1 step = nu_used^2 H P H^T / S^2 <= gate^2` under the
+    /// covariance it starts from.
     // tick bar: the accepted path carries none of this
     #[cold]
     #[inline(never)]
-    fn correct_ungated(&mut self, row: Row, nu: i32, r: i32) -> Update {
-        self.correct(row, nu, r, Gate::Off)
+    fn correct_clipped(&mut self, row: Row, nu: i32, r: i32) -> Update {
+        let (_, s, k) = innovation(&self.p, row, r);
+        // gate sqrt(S) in Q16 mm, rounded down: its square is within the gate
+        // (the bound is below 2^62, its root below 2^31)
+        let most = isqrt64(gate_bound(s, k).unsigned_abs()) as i32;
+        self.correct(row, nu.clamp(-most, most), r)
     }
 
     /// A compass reading failed the gate: counted into the compass's run of
     /// outliers, and at [`cfg::REACQUIRE_AFTER`] the heading is taken as
-    /// lost: its variance to the cap, uncorrelated, and the reading used.
+    /// lost: its variance to the cap, uncorrelated, and the reading used
+    /// (clipped to the gate, which at the cap passes any heading: half a
+    /// turn is 3.1 sigma).
     // tick bar: the accepted path carries none of this
     #[cold]
     #[inline(never)]
@@ -151,7 +157,7 @@ impl Estimator {
         let q = &mut self.p;
         (q.tt, q.xt, q.yt) = (P_MAX, 0, 0);
         self.stats.compass.reacquired = self.stats.compass.reacquired.saturating_add(1);
-        self.correct_ungated(row, nu, R_COMPASS)
+        self.correct_clipped(row, nu, R_COMPASS)
     }
 
     /// Corrects the heading with a compass reading (clockwise from north).
@@ -160,7 +166,7 @@ impl Estimator {
         // angle LSB -> (L rad) mm Q16: |result| < 2^31 * 0.025
         let nu = mul_hi(diff, TILDE_Q16_PER_LSB);
         let row = Row { pos: None, theta: 1 << 16 };
-        let result = match self.correct(row, nu, R_COMPASS, Gate::On) {
+        let result = match self.correct(row, nu, R_COMPASS) {
             Update::Accepted => {
                 self.streaks.compass = 0;
                 Update::Accepted
@@ -172,19 +178,12 @@ impl Estimator {
     }
 
     /// The scalar Kalman correction for innovation `nu` (Q16 mm), row `h`,
-    /// noise `r` (Q14 mm^2, > 0), gated unless re-acquiring. All 32-bit but
-    /// the state update's three products (see the module docs, "Arithmetic
-    /// of a correction").
-    fn correct(&mut self, h: Row, nu: i32, r: i32, gate: Gate) -> Update {
-        // b = P H^T and H P H^T, scaled by 2^-k (Q(14 - k) mm^2).
-        let (b, hph, k) = project(&self.p, h);
-        // S = H P H^T + R > 0: |hph| < 2^30, r >> k < 2^22, so S < 2^31;
-        // H P H^T >= 0 for a valid P, and r >> k >= 1 keeps S positive.
-        let s = hph.max(0) + (r >> k).max(1);
-        // Gate: nu^2 (Q32) against gate^2 S (S 2^k in Q14 = S 2^(18 + k) in
-        // Q32, gate^2 in Q8): nu^2 <= 2^62; gate^2 < 2^12 (asserted) shifted
-        // by 10 + k <= 19 stays below 2^31, and its product with S below 2^62.
-        if gate == Gate::On && mul_wide(nu, nu) > mul_wide(s, GATE_SQ_Q8 << (10 + k)) {
+    /// noise `r` (Q14 mm^2, > 0), gated. All 32-bit but the state update's
+    /// three products (see the module docs, "Arithmetic of a correction").
+    fn correct(&mut self, h: Row, nu: i32, r: i32) -> Update {
+        let (b, s, k) = innovation(&self.p, h, r);
+        // Gate: nu^2 (Q32) against gate^2 S; nu^2 <= 2^62.
+        if mul_wide(nu, nu) > gate_bound(s, k) {
             return Update::Outlier;
         }
         // 1/S = y 2^(ns - 62): S normalised to [2^31, 2^32), its reciprocal
@@ -245,9 +244,28 @@ impl Estimator {
     }
 }
 
+/// `b = P H^T` and `S = H P H^T + R` for row `h` and noise `r`, both scaled
+/// by 2^-k (Q(14 - k) mm^2; see [`project`]), and `k`.
+// tick bar (as the other inline attributes below)
+#[inline(always)]
+fn innovation(p: &Covariance, h: Row, r: i32) -> ([i32; 3], i32, u32) {
+    let (b, hph, k) = project(p, h);
+    // S = H P H^T + R > 0: |hph| < 2^30, r >> k < 2^22, so S < 2^31;
+    // H P H^T >= 0 for a valid P, and r >> k >= 1 keeps S positive.
+    (b, hph.max(0) + (r >> k).max(1), k)
+}
+
+/// `gate^2 S` in Q32 mm^2 (the square of an innovation's Q16) for `S` from
+/// [`innovation`]: S 2^k in Q14 is S 2^(18 + k) in Q32, gate^2 is Q8.
+/// gate^2 < 2^12 (asserted) shifted by 10 + k <= 19 stays below 2^31, and
+/// its product with S below 2^62.
+#[inline(always)]
+fn gate_bound(s: i32, k: u32) -> i64 {
+    mul_wide(s, GATE_SQ_Q8 << (10 + k))
+}
+
 /// `beta / S` for one entry of `b`: `|b| 2^sb` times `y` (1/S, see
 /// [`reciprocal`]), high word, with `b`'s sign (rounded toward zero).
-// tick bar (as the other inline attributes below)
 #[inline(always)]
 fn over_s(bi: i32, sb: u32, y: u32) -> i32 {
     let m = mul_hi_u(bi.unsigned_abs() << sb, y) as i32;
