@@ -1,11 +1,10 @@
 //! The bars for the realistic simulator (`sim::realism` at its
 //! defaults): a simulated hour of the built-in script (laps by `goto`,
 //! steered by the estimate) never more than 30 mm off, over 20 seeds, with
-//! the worst and median printed. Measured from the first `goto` on (the
-//! script's settling time: the robot starts at its known start pose).
+//! the worst and median printed. The robot powers up not knowing where it
+//! is; the hour is measured from its power-up localization's `# located`.
 //!
-//! Measured: worst 25.1 mm over the 20 seeds, the median of their worsts
-//! 16.2 mm, rms about 2 mm, no collision. About 0.4 s per simulated hour
+//! Measured: see the figures the tests print (`-- --nocapture`). About 0.4 s per simulated hour
 //! with the test profile's optimisation, so both run in `cargo test`;
 //! `cargo test --test realistic_hour -- --nocapture` prints the figures.
 
@@ -15,9 +14,6 @@ use paperbot::sim::script::{default_script, Script};
 const HOUR_US: u64 = 3_600_000_000;
 /// The bar: the estimate never farther than this from the truth, mm.
 const BAR_MM: f64 = 30.0;
-/// Samples before the first `goto` (the script's settling, 2 s at 10 Hz)
-/// are not counted.
-const SETTLE_SAMPLES: usize = 20;
 
 struct Hour {
     worst_mm: f64,
@@ -29,14 +25,17 @@ struct Hour {
 
 fn hour(seed: u64) -> Hour {
     let mut robot = SimRobot::new(SimConfig { seed, ..SimConfig::default() });
+    robot.send("rate 0");
+    let located = (0..6_000).any(|_| {
+        robot.tick();
+        robot.take_output().iter().any(|l| l.starts_with("# located "))
+    });
+    assert!(located, "seed {seed}: no fix at power-up");
     let script = Script::parse(&default_script(HOUR_US as f64 / 1e6)).unwrap();
     let mut refusals = 0;
     let samples = robot.run_script(&script, HOUR_US, 10, |l| refusals += usize::from(l.starts_with("# err")));
-    let mut errors: Vec<f64> = samples
-        .iter()
-        .skip(SETTLE_SAMPLES)
-        .map(|s| (s.truth.x - s.estimate.x).hypot(s.truth.y - s.estimate.y))
-        .collect();
+    let mut errors: Vec<f64> =
+        samples.iter().map(|s| (s.truth.x - s.estimate.x).hypot(s.truth.y - s.estimate.y)).collect();
     let rms_mm = (errors.iter().map(|e| e * e).sum::<f64>() / errors.len() as f64).sqrt();
     errors.sort_by(f64::total_cmp);
     Hour {
