@@ -13,9 +13,11 @@
 //!    wall), the next turns go the other way.
 //! 3. From [`cfg::MIN_VIEWS`] views on, the search after each view
 //!    ([`cfg::COLUMNS_PER_TICK`] columns a tick): a fix that is not
-//!    ambiguous ends the procedure; otherwise (ambiguous, or nothing
-//!    fits) another turn and view, up to [`MAX_VIEWS`], whose answer is
-//!    taken as it is (an ambiguous fix says so).
+//!    ambiguous and is certain enough for `goto`
+//!    ([`crate::config::goto::MAX_SIGMA_MM`]) ends the procedure;
+//!    otherwise (ambiguous, too uncertain, or nothing fits) another turn
+//!    and view, up to [`MAX_VIEWS`], whose answer is taken as it is (an
+//!    ambiguous fix says so).
 //!
 //! `tests/locate.rs` measures this procedure on the realistic simulator's
 //! sensors (98.7 % right from random starts); `tests/localize.rs` runs it
@@ -260,7 +262,7 @@ impl Procedure {
     fn searched(&mut self, result: Result<Fix, Failure>) -> Step {
         let last_view = self.count >= MAX_VIEWS;
         match result {
-            Ok(fix) if !fix.ambiguous || last_view => Step::Done(Ok(fix)),
+            Ok(fix) if (!fix.ambiguous && steerable(&fix)) || last_view => Step::Done(Ok(fix)),
             Err(e) if last_view => Step::Done(Err(e)),
             _ => self.enter(Phase::Turn),
         }
@@ -271,4 +273,10 @@ impl Procedure {
         self.ticks = 0;
         Step::Stand
     }
+}
+
+/// The fix is certain enough for `goto` to steer by ([`crate::config::goto::MAX_SIGMA_MM`]).
+fn steerable(fix: &Fix) -> bool {
+    let limit = Length::from_mm(crate::config::goto::MAX_SIGMA_MM);
+    fix.sigma_x <= limit && fix.sigma_y <= limit
 }
