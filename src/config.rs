@@ -514,15 +514,16 @@ pub mod locate {
     /// glancing readings fail or come back as spurious echoes (the lab 2
     /// README; the simulator's `sim::GLANCING_DEG` onset, where half fail).
     pub const GLANCING_DEG: f64 = 75.0;
-    /// Readings averaged before the search, per lidar: five lidar periods
-    /// (0.17 s) take the lidar's 1.6 mm spread below 1 mm.
+    /// Readings per lidar in a view, whose median the search takes: five
+    /// lidar periods (0.17 s); the median takes the lidar's 1.6 mm spread
+    /// to about 1 mm and drops a spurious echo or two.
     pub const LIDAR_READINGS: u8 = 5;
     /// Compass readings averaged: 0.2 s at 100 Hz; the compass's spread
     /// against the truth is mostly per heading, not per reading, so more
     /// would not help (data `magnetometer_heading.csv`).
     pub const COMPASS_READINGS: u8 = 20;
     /// A view's readings are taken for at most this long, ms; a lidar that
-    /// gave fewer than `LIDAR_READINGS` by then gives the mean of what it
+    /// gave fewer than `LIDAR_READINGS` by then gives the median of what it
     /// gave (none: no distance in that view). Five lidar periods and a
     /// half: room for a dropped reading or two.
     pub const VIEW_LIMIT_MS: u32 = 300;

@@ -2,9 +2,11 @@
 //! the realistic simulator: the robot powers up at a random pose in the
 //! box, not knowing where it is, takes its views turning in place, and
 //! starts its estimate at the fix. The bar (the right pose, 30 mm
-//! and 5 degrees, from 95 % of random starts) and what it costs in time.
-//! `cargo test --release --test localize -- --nocapture` prints the
-//! figures.
+//! and 5 degrees, from 95 % of random starts), wrong fixes flagged, the
+//! estimate certain enough for `goto` a second later, and what it costs in
+//! time. Measured: 981 of 1,000 right, 7 wrong and not flagged, 958
+//! steerable; 2.5 s median, 9.7 s at the 95th percentile (`cargo test
+//! --release --test localize -- --nocapture` prints the figures).
 
 use paperbot::sim::arena::Arena;
 use paperbot::sim::body::PoseF64;
@@ -103,6 +105,7 @@ fn the_robot_finds_itself_at_power_up_from_random_starts() {
         println!("  wrong, not flagged: off {off:.0} mm: {line} (truth {start:?})");
     }
     assert!(right * 100 >= starts as usize * 95, "{right} of {starts}");
+    assert!(steerable * 100 >= starts as usize * 90, "{steerable} of {starts} certain enough for goto");
     assert!(wrong_unflagged.len() * 100 <= starts as usize, "{} wrong fixes not flagged", wrong_unflagged.len());
 }
 

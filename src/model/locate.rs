@@ -10,7 +10,9 @@
 //! ([`crate::model::measurement::Beam`], the lidars' cones included) says
 //! what each lidar should read there, and the point is consistent when
 //! every given reading is within [`cfg::TOLERANCE_MM`] of that (as
-//! `|normal_miss| <= tol cone_normal`: no division). The consistent points'
+//! `|normal_miss| <= tol cone_normal`: no division). A beam that would meet
+//! its wall past [`cfg::GLANCING_DEG`] at a point says nothing about that
+//! point (glancing readings fail or lie). The consistent points'
 //! mean is the position; their spread, with the grid's own and the lidars'
 //! noise, its uncertainty ([`Fix`]).
 //!
@@ -37,7 +39,8 @@
 //! MHz, measured by the lx106 benchmarks); a later view is tried only where
 //! the earlier ones fit, and a failed search is repeated at other headings.
 //! The loops are bounded by [`MAX_STEPS`] per axis, [`MAX_VIEWS`] and the
-//! headings tried.
+//! headings tried. [`Search`] does the same work a few grid columns at a
+//! time, so the robot's loop spreads it over its ticks.
 
 use crate::config::locate as cfg;
 use crate::math::{isqrt64, mul_q30, Angle, Coord, Length};
