@@ -244,7 +244,7 @@ fn run_tui(
                     Some(Action::Slower) => {
                         driver.slower();
                     }
-                    Some(Action::ResetPose) => link::send(port, &keys::reset_pose_command())?,
+                    Some(Action::Locate) => link::send(port, keys::LOCATE_COMMAND)?,
                     Some(Action::Status) => link::send(port, "status")?,
                     Some(Action::ToggleHelp) => help = !help,
                     Some(Action::Quit) => return Ok(()),

@@ -532,7 +532,7 @@ pub mod locate {
     /// (`pose` or `locate` then).
     pub const AT_POWER_UP: bool = true;
     /// Views taken before the first search: two views can agree on a
-    /// wrong pose far off (`tests/locate.rs`: 80 % right from two, 98.7 %
+    /// wrong pose far off (`tests/locate.rs`: 75 % right from two, 99.2 %
     /// from three).
     pub const MIN_VIEWS: usize = 3;
     /// The turn in place between views, degrees: two views at 45 degrees

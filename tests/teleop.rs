@@ -49,7 +49,7 @@ fn keys_map_to_actions() {
         (Key::Char('-'), Some(Slower)),
         (Key::Char('_'), Some(Slower)),
         (Key::Char('z'), Some(Slower)),
-        (Key::Char('r'), Some(ResetPose)),
+        (Key::Char('r'), Some(Locate)),
         (Key::Char('p'), Some(Status)),
         (Key::Char('h'), Some(ToggleHelp)),
         (Key::Char('?'), Some(ToggleHelp)),
@@ -67,12 +67,9 @@ fn keys_map_to_actions() {
 }
 
 #[test]
-fn r_puts_the_pose_at_the_centre_of_the_box_facing_north() {
-    let cmd = paperbot::host::teleop::keys::reset_pose_command();
-    let Ok(Command::SetPose { x_mm, y_mm, heading }) = parse(cmd.as_bytes()) else { panic!("{cmd} is not a pose") };
-    let (lx, wy) = (config::arena::LENGTH_X.to_mm_f64(), config::arena::WIDTH_Y.to_mm_f64());
-    assert!((f64::from(x_mm) - lx / 2.0).abs() <= 0.5 && (f64::from(y_mm) - wy / 2.0).abs() <= 0.5, "{cmd}");
-    assert_eq!(heading, paperbot::math::Angle::ZERO, "{cmd}");
+fn r_asks_the_robot_to_find_its_pose() {
+    let cmd = paperbot::host::teleop::keys::LOCATE_COMMAND;
+    assert_eq!(parse(cmd.as_bytes()), Ok(Command::Locate));
 }
 
 // ---- speed levels ----------------------------------------------------------

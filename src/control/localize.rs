@@ -20,7 +20,7 @@
 //!    ambiguous fix says so).
 //!
 //! `tests/locate.rs` measures this procedure on the realistic simulator's
-//! sensors (98.7 % right from random starts); `tests/localize.rs` runs it
+//! sensors (99.2 % right from random starts); `tests/localize.rs` runs it
 //! in the loop.
 //!
 //! The procedure owns no hardware and no clock: the loop hands it the

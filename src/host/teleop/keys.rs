@@ -10,20 +10,18 @@
 //! | Space, `x`             | stop                                     |
 //! | `+`, `=`, `e`          | next speed level                         |
 //! | `-`, `_`, `z`          | previous speed level                     |
-//! | `r`                    | pose = the box's centre, facing north    |
+//! | `r`                    | find the pose again (`locate`)           |
 //! | `p`                    | ask for the robot's `status` line        |
 //! | `h`, `?`               | show or hide the key help                |
 //! | `q`, Esc, Ctrl-C       | stop the robot and quit                  |
 //!
-//! `r` is for a robot put down in the middle of the box facing north: the
-//! estimator starts from there and the walls it sees confirm it (the
-//! protocol's `reset`, pose 0 0 0, would put it in a corner, half of it
-//! outside the box). Letters work in either case. A terminal reports no key releases, so a
+//! `r` is for a robot that was carried or got lost: it turns in place and
+//! finds where it is from the walls (`control::localize`). Letters work in
+//! either case. A terminal reports no key releases, so a
 //! motion is latched: it runs until space or another motion key, and the
 //! tool keeps refreshing it (see [`super::drive`]).
 
 use crate::model::MotionKind;
-use std::string::String;
 
 /// A key press, as far as the tool cares.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
@@ -45,7 +43,7 @@ pub enum Action {
     Drive(MotionKind),
     Faster,
     Slower,
-    ResetPose,
+    Locate,
     Status,
     ToggleHelp,
     Quit,
@@ -67,7 +65,7 @@ pub fn action(key: Key) -> Option<Action> {
             ' ' | 'x' => Action::Drive(MotionKind::Stop),
             '+' | '=' | 'e' => Action::Faster,
             '-' | '_' | 'z' => Action::Slower,
-            'r' => Action::ResetPose,
+            'r' => Action::Locate,
             'p' => Action::Status,
             'h' | '?' => Action::ToggleHelp,
             'q' => Action::Quit,
@@ -81,12 +79,8 @@ pub fn action(key: Key) -> Option<Action> {
 pub const HELP: &[&str] = &[
     "arrows / WASD: drive (held until space or another key)",
     "space or x: stop      + / -  (or e / z): speed level",
-    "r: pose = box centre facing north   p: status   h: hide help   q / Esc: stop and quit",
+    "r: find the pose (turns in place)   p: status   h: hide help   q / Esc: stop and quit",
 ];
 
-/// The command `r` sends: the pose at the centre of the box
-/// (`config::arena`), facing north, in whole mm.
-pub fn reset_pose_command() -> String {
-    let (lx, wy) = (crate::config::arena::LENGTH_X.to_mm_f64(), crate::config::arena::WIDTH_Y.to_mm_f64());
-    std::format!("pose {:.0} {:.0} 0", lx / 2.0, wy / 2.0)
-}
+/// The command `r` sends.
+pub const LOCATE_COMMAND: &str = "locate";
