@@ -47,6 +47,11 @@
 //! wall stop: a forward motion, whatever started it, stops when the front
 //! lidar sees something nearer than [`config::goto::WALL_STOP_MM`].
 //!
+//! Localization (`locating.rs`): `locate`, `reset` and the power-up run
+//! `control::localize`; while it runs, the readings go to its views instead
+//! of the estimator, it turns the body between views, and its fix starts
+//! the estimator. The calibration sweep is in `sweep.rs`.
+//!
 //! No allocation, no panics: every buffer is a bounded `heapless` one, every
 //! clock difference is wrapping or saturating, every index is checked.
 
@@ -54,12 +59,11 @@ mod clock;
 mod health;
 mod locating;
 mod mode;
+mod sweep;
 mod untethered;
 mod views;
 
 use crate::config;
-use crate::control::protocol::number::push_str;
-use crate::control::protocol::response::{format_calibration_report, format_config_line};
 use clock::{ms_to_us, reached, Stamp, Timer, OVERRUN_US};
 use health::Which;
 
@@ -68,8 +72,8 @@ use crate::control::protocol::{
     ParseError, Response, Side, Telemetry, HELP, MAX_OUT_LINE,
 };
 use crate::driver::{CompassSample, HeadingSensor, LidarSample, MagCalibrate, Servos};
-use crate::math::{div_u64, Angle, Dt, Length, TurnRate};
-use crate::model::compass::{CalStatus, CalibrationError, MagCalibration, MagCalibrator};
+use crate::math::{div_u64, Angle, Dt, Length};
+use crate::model::compass::{CalStatus, MagCalibrator};
 use crate::model::estimator::{Estimator, Update};
 use crate::model::measurement::{Arena, LidarId};
 use crate::model::{advance, ActuatorModel, Drive, Motion, Pose};
@@ -326,20 +330,7 @@ where
                 }
             }
             Command::SetPose { x_mm, y_mm, heading } => self.set_pose(Pose::from_mm(x_mm, y_mm, heading)),
-            Command::Calibrate { samples } => {
-                let calibrator = MagCalibrator::new(
-                    self.compass.asa(),
-                    config::compass::AXES,
-                    samples,
-                    config::compass::CALIBRATION_MIN_SECTORS,
-                    config::compass::CALIBRATION_MIN_RADIUS,
-                );
-                self.calibrator = Some(calibrator);
-                let turn = Motion::Turn(TurnRate::from_mrad_s(config::compass::CALIBRATION_TURN_MRAD_S));
-                // max_samples <= u16::MAX: the product fits in u32 (asserted at MAX_SPAN_MS)
-                let limit_ms = u32::from(calibrator.max_samples()) * config::compass::CALIBRATION_MS_PER_SAMPLE;
-                self.mode = Mode::Calibrate { drive: self.model.drive(turn), timer: Timer::new(Some(limit_ms)) };
-            }
+            Command::Calibrate { samples } => self.begin_sweep(samples),
             Command::Rate { hz } => {
                 self.set_rate(hz);
             }
@@ -582,41 +573,6 @@ where
                     self.mode = Mode::Idle;
                     self.respond(&Response::Note("deadman: no command, stopped"), sink);
                 }
-            }
-        }
-    }
-
-    /// Ends the running sweep with its result (its samples are in, or its
-    /// time is up).
-    fn finish_sweep(&mut self, sink: &mut impl LineSink) {
-        let result = self.calibrator.as_ref().map(MagCalibrator::result);
-        self.end_calibration(result, sink);
-    }
-
-    /// Ends a calibration sweep: applies and prints a good result, reports
-    /// a bad one (`None`: abandoned for another command). The robot stops.
-    fn end_calibration(&mut self, result: Option<Result<MagCalibration, CalibrationError>>, sink: &mut impl LineSink) {
-        let (samples, sectors) = self.calibrator.map(|c| (c.samples(), c.sectors())).unwrap_or((0, 0));
-        self.calibrator = None;
-        self.calibration_done = false;
-        if matches!(self.mode, Mode::Calibrate { .. }) {
-            self.mode = Mode::Idle;
-        }
-        if let Some(Ok(cal)) = result {
-            self.compass.set_calibration(cal);
-        }
-        // Integer formatting (no core::fmt on the robot), straight into the
-        // output line: every text here is printable ASCII, as `Response::Note`
-        // and `Fail` would leave it. A line that does not fit is cut short,
-        // which MAX_OUT_LINE makes impossible here.
-        self.out.clear();
-        if format_calibration_report(&mut self.out, result, samples, sectors).is_ok() {
-            sink.write_line(&self.out);
-        }
-        if let Some(Ok(cal)) = result {
-            self.out.clear();
-            if push_str(&mut self.out, "# ").and_then(|()| format_config_line(&mut self.out, &cal)).is_ok() {
-                sink.write_line(&self.out);
             }
         }
     }
