@@ -140,3 +140,26 @@ fn after_the_fix_goto_works_and_reset_relocates() {
     let s = robot.sample();
     assert!(s.truth.distance(&s.estimate) <= 30.0, "{lines:?} {s:?}");
 }
+
+/// A `goto` on an estimate too uncertain to steer by finds the pose first,
+/// then goes; in a mission too (the cable pulled: nobody to type `pose`).
+#[test]
+fn a_goto_when_lost_locates_first_then_goes() {
+    let start = PoseF64::new(300.0, 250.0, 0.5);
+    let mut robot = SimRobot::new(SimConfig { start, seed: 5, locate_at_power_up: false, ..SimConfig::default() });
+    robot.send("rate 0");
+    // told a wrong pose: 100 mm uncertain, and 200 mm off
+    robot.send("pose 500 150 30");
+    robot.send("goto 200 300");
+    let mut lines = robot.take_output();
+    assert_eq!(lines[2], "# estimate too uncertain to steer by: locating first", "{lines:?}");
+    for _ in 0..2_000 {
+        robot.tick();
+        lines.extend(robot.take_output());
+    }
+    let located = lines.iter().position(|l| l.starts_with("# located ")).expect("a fix");
+    assert_eq!(lines[located + 1], "# ok goto 200 300", "{lines:?}");
+    assert!(lines.iter().any(|l| l.starts_with("# done at")), "{lines:?}");
+    let t = robot.truth();
+    assert!((t.x - 200.0).hypot(t.y - 300.0) <= 20.0, "ended at {t:?}");
+}

@@ -97,11 +97,9 @@ fn face_ends_within_3_degrees() {
 #[test]
 fn goto_refuses_what_it_cannot_do_and_says_why() {
     let mut r = robot(380.0, 250.0, 0.0, 3);
-    // just after `pose` the estimate is 100 mm uncertain
     r.send("pose 380 250 0");
-    r.send("goto 500 250");
-    let lines = r.take_output();
-    assert!(lines.iter().any(|l| l.starts_with("# err goto 500 250: estimate too uncertain")), "{lines:?}");
+    // just after `pose` the estimate is 100 mm uncertain (a goto would
+    // locate first: tests/localize.rs); the walls settle it
     ticks(&mut r, 2.0);
     let start = r.truth();
     for target in ["goto 900 250", "goto 380 20", "goto 380 -5", "goto 720 250"] {

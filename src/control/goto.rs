@@ -81,7 +81,7 @@ impl Refusal {
     pub fn text(self) -> &'static str {
         match self {
             Refusal::TooNearWall => "target outside the box or too close to a wall for the body",
-            Refusal::Uncertain => "estimate too uncertain, let it settle (status) or set the pose",
+            Refusal::Uncertain => "estimate too uncertain to steer by, even after locating: set the pose",
         }
     }
 }

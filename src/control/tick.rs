@@ -173,6 +173,8 @@ pub struct Controller<F, R, C, S, L = RingLog<0>> {
     mission: Mission,
     /// The localization procedure (its state while in [`Mode::Locate`]).
     locating: Procedure,
+    /// The `goto` or `face` that waits for the localization's fix.
+    after_locate: Option<Command>,
     log: L,
 }
 
@@ -257,6 +259,7 @@ where
             mission_changed: false,
             mission: Mission::new(),
             locating: Procedure::new(),
+            after_locate: None,
             log,
         }
     }
@@ -346,7 +349,7 @@ where
                     sink.write_line(line);
                 }
             }
-            Command::Goto { .. } | Command::Face { .. } | Command::Wait { .. } => self.begin(&cmd, sink),
+            Command::Goto { .. } | Command::Face { .. } | Command::Wait { .. } => self.begin(&cmd, true, sink),
             Command::Mission(op) => self.mission_op(op, &cmd, sink),
             Command::Log { hz } => self.set_log_rate(hz),
             Command::Dump => self.start_dump(sink),

@@ -36,6 +36,7 @@ where
     /// robot stands for its first view.
     pub(super) fn begin_locate(&mut self) {
         self.locating = Procedure::new();
+        self.after_locate = None;
         self.mode = Mode::Locate { drive: self.model.stop(), timer: Timer::new(Some(cfg::TIME_LIMIT_MS)) };
     }
 
@@ -81,11 +82,15 @@ where
         }
         let views = self.locating.views().len();
         self.locating = Procedure::new();
+        let then = self.after_locate.take();
         match result {
             Ok(fix) => {
                 self.estimator.start_at(&fix);
                 self.dead = fix.pose;
                 self.report_fix(&fix, views, sink);
+                if let Some(cmd) = then {
+                    self.begin(&cmd, false, sink);
+                }
             }
             Err(why) => {
                 self.estimator.reset(self.estimator.pose());
@@ -95,6 +100,9 @@ where
                     .and_then(|()| push_str(&mut self.out, "; the pose is unknown until `pose` or `locate`"));
                 if line.is_ok() {
                     sink.write_line(&self.out);
+                }
+                if let Some(cmd) = then {
+                    self.refuse(&cmd, why.text(), sink);
                 }
             }
         }

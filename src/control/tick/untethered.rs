@@ -90,8 +90,10 @@ where
     }
 
     /// Starts a `goto`, `face` or `wait` (from a command or a mission
-    /// step); a refused one answers why and aborts a running mission.
-    pub(super) fn begin(&mut self, cmd: &Command, sink: &mut impl LineSink) {
+    /// step); a refused one answers why and aborts a running mission. An
+    /// estimate too uncertain to steer by is found first (`locate`), then
+    /// the command starts (`may_locate` false: it is refused).
+    pub(super) fn begin(&mut self, cmd: &Command, may_locate: bool, sink: &mut impl LineSink) {
         let target = match *cmd {
             Command::Goto { x_mm, y_mm } => Target::Point { x_mm, y_mm },
             Command::Face { heading } => Target::Heading(heading),
@@ -101,10 +103,19 @@ where
             }
             _ => return,
         };
-        if let Err(why) = check_target(target, &self.estimator.arena()).and_then(|()| self.certain_enough(1)) {
-            self.mode = Mode::Idle;
-            self.refuse(cmd, why.text(), sink);
-            return;
+        match check_target(target, &self.estimator.arena()).and_then(|()| self.certain_enough(1)) {
+            Ok(()) => {}
+            Err(Refusal::Uncertain) if may_locate => {
+                self.respond(&Response::Note("estimate too uncertain to steer by: locating first"), sink);
+                self.begin_locate();
+                self.after_locate = Some(*cmd);
+                return;
+            }
+            Err(why) => {
+                self.mode = Mode::Idle;
+                self.refuse(cmd, why.text(), sink);
+                return;
+            }
         }
         self.respond(&Response::Ok(cmd), sink);
         let timer = Timer::new(Some(config::goto::TIME_LIMIT_MS));
@@ -127,7 +138,7 @@ where
     }
 
     /// `# err <command>: <why>`.
-    fn refuse(&mut self, cmd: &Command, why: &str, sink: &mut impl LineSink) {
+    pub(super) fn refuse(&mut self, cmd: &Command, why: &str, sink: &mut impl LineSink) {
         self.out.clear();
         let line = push_str(&mut self.out, "# err ")
             .and_then(|()| format_command(cmd, &mut self.out))
@@ -287,7 +298,7 @@ where
                 self.mode = Mode::Drive { drive, timer: Timer::new(Some(duration_ms)) };
             }
             Step::Pose { x_mm, y_mm, heading } => self.set_pose(crate::model::Pose::from_mm(x_mm, y_mm, heading)),
-            Step::Wait { .. } | Step::Goto { .. } | Step::Face { .. } => self.begin(&cmd, sink),
+            Step::Wait { .. } | Step::Goto { .. } | Step::Face { .. } => self.begin(&cmd, true, sink),
         }
     }
 
