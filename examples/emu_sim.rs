@@ -14,9 +14,12 @@
 //!   --out FILE        SVG output (default target/emu/emu-sim.svg)
 //! ```
 //!
-//! The estimate is the telemetry's pose; the dead reckoning is the
-//! telemetry's motion column integrated at the rows' times (the image
-//! does not report its own), so it is only as fine as the telemetry rate.
+//! The estimate is the telemetry's pose from the image's fix on (its
+//! `# located` line, or the answer to `pose`); the dead reckoning is the
+//! telemetry's motion column integrated from the fix at the rows' times
+//! (the image does not report its own), so it is only as fine as the
+//! telemetry rate. Each `# located` line is printed with the true pose at
+//! its time.
 //! Exit code 1 when the robot refused a script command, 2 for bad options.
 
 use std::io::{BufReader, Write};
@@ -116,6 +119,25 @@ fn pose_of(r: &TelemetryRow) -> PoseF64 {
     PoseF64::new(f64::from(r.x_dmm) / 10.0, f64::from(r.y_dmm) / 10.0, f64::from(r.heading_mdeg).to_radians() / 1000.0)
 }
 
+/// ` (truth ...; fix error N mm, heading error N deg)` for a `# located x
+/// y heading ...` line; empty for any other.
+fn against_truth(line: &str, truth: &PoseF64) -> String {
+    let mut words = line.strip_prefix("# located ").unwrap_or_default().split_whitespace();
+    let mut number = || words.next().and_then(|w| w.parse::<f64>().ok());
+    let (Some(x), Some(y), Some(deg)) = (number(), number(), number()) else {
+        return String::new();
+    };
+    let fix = PoseF64::new(x, y, deg.to_radians());
+    format!(
+        " (truth x {:.1} y {:.1} heading {:.1} deg; fix error {:.1} mm, heading error {:.1} deg)",
+        truth.x,
+        truth.y,
+        truth.theta.to_degrees().rem_euclid(360.0),
+        truth.distance(&fix),
+        truth.heading_error(&fix).to_degrees()
+    )
+}
+
 fn motion_of(r: &TelemetryRow) -> MotionF64 {
     match (r.v_mm_s, r.w_mrad_s) {
         (0, 0) => MotionF64::Stop,
@@ -158,12 +180,14 @@ fn main() -> ExitCode {
 }
 
 fn summary(args: &Args, robot: &EmulatedRobot) -> ExitCode {
-    // The image boots believing it is at (0, 0, 0): its rows count from the
-    // answer to the script's first command, the start pose.
+    // The image powers up at the box's centre, not knowing where it is:
+    // its rows count from its fix, the power-up localization's `# located`
+    // (or the answer to `pose` when it is told its start)
+    let up_ns = robot.script_start_ns().unwrap_or(0);
     let start_ns = robot
         .lines
         .iter()
-        .find(|(t, l)| *t >= robot.script_start_ns().unwrap_or(0) && l.starts_with("# ok pose"))
+        .find(|(t, l)| *t >= up_ns && (l.starts_with("# located") || l.starts_with("# ok pose")))
         .map_or(0, |(t, _)| *t);
     let rows: Vec<(u64, TelemetryRow)> = robot
         .lines
@@ -176,7 +200,8 @@ fn summary(args: &Args, robot: &EmulatedRobot) -> ExitCode {
     // virtual time
     let offset_ns = rows.iter().map(|(t, r)| t.saturating_sub(u64::from(r.t_ms) * 1_000_000)).min().unwrap_or(0);
     let d = paperbot::config::geometry::ROTATION_TO_REFERENCE.to_mm_f64();
-    let mut dead = args.cfg.start;
+    // the image's dead reckoning starts from its fix
+    let mut dead = rows.first().map_or(args.cfg.start, |(_, r)| pose_of(r));
     let mut truth = Vec::new();
     let mut est = Vec::new();
     let mut dead_track = Vec::new();
@@ -215,6 +240,12 @@ fn summary(args: &Args, robot: &EmulatedRobot) -> ExitCode {
     for (t, l) in &robot.lines {
         if l.starts_with("lidars ") {
             eprintln!("  bring-up at {:.3} s: {l}", *t as f64 * 1e-9);
+        }
+    }
+    for (t, l) in &robot.lines {
+        if l.starts_with("# located") || l.starts_with("# locate failed") {
+            let after = t.saturating_sub(up_ns) as f64 * 1e-9;
+            eprintln!("  {after:.3} s after bring-up: {l}{}", against_truth(l, &robot.truth_at(*t)));
         }
     }
     let f = robot.sensors.front.borrow();

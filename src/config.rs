@@ -547,10 +547,12 @@ pub mod locate {
     /// A turn the compass says moved less than this, degrees, was blocked
     /// (the body against a wall): the next turns go the other way.
     pub const BLOCKED_TURN_DEG: i32 = 20;
-    /// Grid columns searched per loop tick: about 1.3 ms each on the lx106
-    /// (a column is 99 points of the team's box, lx106/BENCHMARKS.md), so
-    /// two leave most of the 10 ms tick for its work, and a pass over the
-    /// box takes 0.8 s.
+    /// Grid columns searched per loop tick (a column is 99 points of the
+    /// team's box): two take up to 267,000 lx106 instructions (the worst
+    /// slice of the search in lx106/BENCHMARKS.md), a third of the 10 ms
+    /// tick at 80 MHz and one instruction a cycle (half at 1.5 cycles),
+    /// which leaves the tick's own work room; a pass over the box takes 77
+    /// ticks (0.8 s).
     pub const COLUMNS_PER_TICK: u32 = 2;
     /// The whole procedure's time limit, ms: eight views (5 s) and a
     /// search that tries every heading (50 passes, 39 s).

@@ -166,7 +166,9 @@ pub struct EmulatedRobot {
     /// byte left.
     pub lines: Vec<(u64, String)>,
     script: Script,
-    /// The first command: where the firmware starts believing it is.
+    /// The first command: where the firmware starts believing it is
+    /// (`pose`, which ends its power-up localization); empty when it is to
+    /// localize ([`SimConfig::locate_at_power_up`]).
     preamble: String,
     /// The script's time zero: when the firmware has brought its sensors up.
     script_start_ns: Option<u64>,
@@ -191,7 +193,11 @@ impl EmulatedRobot {
         let disturbance_phase = rng.range_f64(0.0, core::f64::consts::TAU);
         set_truth(&sensors, &cfg, &cfg.start, &mut rng, disturbance_phase);
         let s = cfg.start;
-        let preamble = std::format!("pose {:.0} {:.0} {:.1}\n", s.x, s.y, s.theta.to_degrees().rem_euclid(360.0));
+        let preamble = if cfg.locate_at_power_up {
+            String::new()
+        } else {
+            std::format!("pose {:.0} {:.0} {:.1}\n", s.x, s.y, s.theta.to_degrees().rem_euclid(360.0))
+        };
         EmulatedRobot {
             cfg,
             sensors,

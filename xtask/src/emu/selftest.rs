@@ -145,7 +145,8 @@ fn check_pulses(r: &mut Report, run: &Run, name: &str, from: u64, to: u64, width
     }
 }
 
-/// Idle run: banner, `status`, sensors down, LED blink, no watchdog reset.
+/// Idle run: banner, `status`, sensors down, the power-up localization
+/// failing, the wheels still, LED blink, no watchdog reset.
 fn idle(r: &mut Report, board: &Board, work: &Path, flash: &Path, e: &Expect) -> Result<(), String> {
     const SECONDS: f64 = 10.0;
     let run = boot(board, work, "idle", flash, &["status"], SECONDS, &e.banner)?;
@@ -156,6 +157,22 @@ fn idle(r: &mut Report, board: &Board, work: &Path, flash: &Path, e: &Expect) ->
     let down = ["front=down", "right=down", "compass=down"];
     let all_down = status.is_some_and(|s| down.iter().all(|d| s.contains(d)));
     r.check("no sensors: each reported down", all_down, down.join(" "));
+    let after_banner = uart.split_once(&e.banner).map_or("", |(_, rest)| rest);
+    let asked = after_banner.find("# ok locate");
+    let failed = after_banner.find("# locate failed: no compass heading");
+    let located = after_banner.contains("# located");
+    r.check(
+        "power-up localization: asked, and failed for want of a compass heading",
+        matches!((asked, failed), (Some(a), Some(f)) if a < f) && !located,
+        format!(
+            "'# ok locate' {}, '# locate failed: no compass heading' {}{}",
+            found(asked.is_some()),
+            found(failed.is_some()),
+            if located { ", but a '# located' line" } else { "" }
+        ),
+    );
+    let neutral = [e.width_us(90.0); 2];
+    check_pulses(r, &run, "the wheels stay still with sensors down", 0, u64::MAX, neutral, e);
     let banners = uart.matches(&e.banner).count();
     let resets = run.events.watchdog_resets.len();
     r.check(

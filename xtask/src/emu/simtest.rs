@@ -1,8 +1,10 @@
 //! `cargo fw-emu --sim-test`: the unchanged image driving the simulated
 //! robot through the emulated board's pins (`sim.rs`). Checks: bring-up
-//! finds both lidars at their new addresses and the compass; the built-in
-//! 20 s drive ends with the estimate within 10 mm of the truth; the deadman
-//! stops the wheels; the loop runs at its configured rate; and after each
+//! finds both lidars at their new addresses and the compass; the image
+//! localizes at power-up (within 30 mm and 5 degrees of the truth) before
+//! the built-in 20 s drive, which ends with the estimate within 10 mm of
+//! the truth; a command interrupts the localization; the deadman stops the
+//! wheels; the loop runs at its configured rate; and after each
 //! wire fault (a chip that NACKs, SDA held low, a lidar that never gets
 //! ready) the image recovers: the fault is counted and the sensor reads
 //! again. Prints `N passed, N failed`; fails when any check does.
@@ -17,6 +19,10 @@ use super::sim::{self, SimOptions, SimRun};
 const MS: u64 = 1_000_000;
 /// The bar of the scripted drive: estimate error at the end, mm.
 const DRIVE_ERROR_MM: f64 = 10.0;
+/// The bars of the power-up localization (issue 23): position mm, heading
+/// degrees.
+const LOCATE_ERROR_MM: f64 = 30.0;
+const LOCATE_ERROR_DEG: f64 = 5.0;
 /// Servo pins, left then right (config::pins).
 const SERVO_PINS: [u8; 2] = [5, 4];
 /// Telemetry columns (control::protocol::telemetry::HEADER).
@@ -26,13 +32,26 @@ const COMPASS: usize = 19;
 const F_BUS: usize = 20;
 const F_TIMEOUT: usize = 21;
 const F_MISSING: usize = 22;
+const F_OVERRUNS: usize = 25;
 
-/// Telemetry rows of a run's UART0 output, split into fields.
+/// A telemetry row of UART0 output, split into fields.
+fn row(line: &str) -> Option<Vec<&str>> {
+    Some(line.trim_end().split(',').collect::<Vec<_>>()).filter(|f| f.len() == 26 && f[0].parse::<u32>().is_ok())
+}
+
+/// Telemetry rows of a run's UART0 output.
 fn rows(uart: &str) -> Vec<Vec<&str>> {
-    uart.lines()
-        .map(|l| l.trim_end().split(',').collect::<Vec<_>>())
-        .filter(|f| f.len() == 26 && f[0].parse::<u32>().is_ok())
-        .collect()
+    uart.lines().filter_map(row).collect()
+}
+
+/// The overrun counter a second before the first `# located` line (the
+/// search's slices run in the ticks before it) and in the row after it.
+fn overruns_around_fix(uart: &str) -> Option<(u64, u64)> {
+    let mut lines = uart.lines();
+    let before: Vec<Vec<&str>> = lines.by_ref().take_while(|l| !l.starts_with("# located")).filter_map(row).collect();
+    let after = lines.find_map(row)?;
+    let earlier = before.iter().rev().find(|r| t_ms(r) + 1000 <= t_ms(&after))?;
+    Some((counter(earlier, F_OVERRUNS), counter(&after, F_OVERRUNS)))
 }
 
 fn t_ms(row: &[&str]) -> u32 {
@@ -91,6 +110,35 @@ pub fn run(root: &Path, board: &Board, work: &Path, flash: &Path) -> Result<(), 
         up && drive.summary.contains(&want),
         format!("{}; {want}", if up { "all three up" } else { "a sensor down" }),
     );
+    // the power-up localization: found before the script's first `goto`
+    // (which would interrupt it), near the truth at that time
+    let uart = &drive.output.uart;
+    let fix = drive.summary.lines().find(|l| l.contains("after bring-up: # located"));
+    let fix_mm = fix.and_then(|l| summary_number(l, "fix error")).unwrap_or(f64::INFINITY);
+    let fix_deg = fix.and_then(|l| summary_number(l, "heading error")).unwrap_or(f64::INFINITY);
+    let before_drive = match (uart.find("# located"), uart.find("# ok goto")) {
+        (Some(located), Some(goto)) => located < goto,
+        _ => false,
+    };
+    r.check(
+        "the image localizes at power-up, near the truth, before the drive",
+        fix.is_some_and(|l| !l.contains("ambiguous"))
+            && fix_mm <= LOCATE_ERROR_MM
+            && fix_deg.abs() <= LOCATE_ERROR_DEG
+            && before_drive
+            && !uart.contains("# locate failed"),
+        format!(
+            "{} (bars {LOCATE_ERROR_MM} mm, {LOCATE_ERROR_DEG} deg){}",
+            fix.map_or("no '# located' line", str::trim),
+            if before_drive { "" } else { "; not before the first goto" }
+        ),
+    );
+    let overruns = overruns_around_fix(uart);
+    r.check(
+        "the search's slices keep the loop's rate (no overrun in the second before the fix)",
+        overruns.is_some_and(|(a, b)| a == b),
+        overruns.map_or("no rows around the fix".into(), |(a, b)| format!("overruns {a} then {b}")),
+    );
     let err = summary_number(&drive.summary, "estimate error at the end").unwrap_or(f64::INFINITY);
     r.check(
         "the built-in 20 s drive ends with the estimate near the truth",
@@ -111,6 +159,12 @@ pub fn run(root: &Path, board: &Board, work: &Path, flash: &Path) -> Result<(), 
     let widths: Vec<Option<f64>> =
         SERVO_PINS.iter().map(|p| summarize(&events.pulses(*p, end.saturating_sub(200 * MS), end)).width_us).collect();
     let stopped = widths.iter().all(|w| w.is_some_and(|w| (w - neutral).abs() <= 5.0));
+    let interrupted = deadman.output.uart.contains("# locate failed: interrupted by a command");
+    r.check(
+        "a command interrupts the power-up localization",
+        interrupted,
+        format!("'# locate failed: interrupted by a command' {}", if interrupted { "found" } else { "missing" }),
+    );
     let said = deadman.output.uart.contains("deadman");
     r.check(
         "the deadman stops the wheels",
@@ -155,4 +209,32 @@ pub fn run(root: &Path, board: &Board, work: &Path, flash: &Path) -> Result<(), 
         );
     }
     r.finish()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A telemetry row at `t_ms` with `overruns` (the other fields 0).
+    fn row_at(t_ms: u32, overruns: u32) -> String {
+        let mut fields = vec!["0".to_string(); 26];
+        fields[0] = t_ms.to_string();
+        fields[F_OVERRUNS] = overruns.to_string();
+        fields.join(",")
+    }
+
+    #[test]
+    fn overruns_are_read_a_second_before_the_fix_and_after_it() {
+        let uart = |overrun_at_ms: u32| {
+            let mut lines: Vec<String> =
+                (0..=20).map(|i| row_at(i * 100, u32::from(i * 100 >= overrun_at_ms))).collect();
+            lines.insert(19, "# located 115 223 88.883 sigma 7 7 mm, views 3".into());
+            lines.join("\n")
+        };
+        // the fix follows the row at 1,800 ms; the row after it is at 1,900
+        assert_eq!(overruns_around_fix(&uart(100)), Some((1, 1)));
+        assert_eq!(overruns_around_fix(&uart(1_500)), Some((0, 1)));
+        assert_eq!(overruns_around_fix(&uart(5_000)), Some((0, 0)));
+        assert_eq!(overruns_around_fix("0,1,2\n# located 1 2 3"), None);
+    }
 }
