@@ -1,0 +1,83 @@
+//! Localization (`model::locate`): where in the box the robot is, searched
+//! at power-up and on `locate` from the compass and the two lidars.
+
+/// Grid step of the search, mm: 15,000 points in the team's box, each
+/// two lidar models (about 0.2 s on the lx106, lx106/BENCHMARKS.md).
+pub const GRID_MM: i32 = 5;
+/// A grid point explains a reading within this, mm: three lidar sigmas
+/// (`estimator::LIDAR_SIGMA`: 6 mm), half the grid's diagonal (3.5 mm),
+/// and what the compass's spread (2.5 degrees, `estimator::
+/// COMPASS_SIGMA_DEG`) moves an oblique beam's reading at typical
+/// ranges (a few mm).
+pub const TOLERANCE_MM: f64 = 12.0;
+/// Points that explain the readings spread over more than this on an
+/// axis: the fix is ambiguous (reported as such), mm. Two tolerances
+/// and a grid step over the span of one point's neighbourhood.
+pub const AMBIGUOUS_SPAN_MM: i32 = 60;
+/// A view taken after turns in place explains its readings within
+/// this more, mm: a real turn pivots about a point behind the axle
+/// (`sim::PIVOT_BEHIND_AXLE_MM`, 10 mm, spread 5 mm), which moves the
+/// reference point off the turn-in-place model by up to twice that
+/// (after a half turn: 20 mm, 30 mm at two sigmas).
+pub const TURN_TOLERANCE_MM: f64 = 20.0;
+/// With more readings than this over all views, the search lets one of
+/// them go unexplained when nothing explains them all (a glancing
+/// reading's spurious echo, `sim::SPURIOUS_SHARE`): the rest still pin
+/// the pose.
+pub const MIN_READINGS_FOR_OUTLIER: u32 = 3;
+/// When nothing fits at the compass's heading, the search tries headings
+/// this far apart, degrees (the compass's 2.5-degree spread, `estimator::
+/// COMPASS_SIGMA_DEG`) ...
+pub const HEADING_STEP_DEG: f64 = 2.5;
+/// ... up to this many each way (30 degrees: the real drive's compass,
+/// `tests/data/lab2/drive1.csv`, is fitted by no pose within 10 degrees
+/// of its first reading; the box is only roughly aligned with north).
+pub const HEADING_STEPS: u8 = 12;
+/// A reading whose beam would meet its wall past this incidence, at a
+/// point the search tries, says nothing about that point, degrees:
+/// glancing readings fail or come back as spurious echoes (the lab 2
+/// README; the simulator's `sim::GLANCING_DEG` onset, where half fail).
+pub const GLANCING_DEG: f64 = 75.0;
+/// Readings per lidar in a view, whose median the search takes: five
+/// lidar periods (0.17 s); the median takes the lidar's 1.6 mm spread
+/// to about 1 mm and drops a spurious echo or two.
+pub const LIDAR_READINGS: u8 = 5;
+/// Compass readings averaged: 0.2 s at 100 Hz; the compass's spread
+/// against the truth is mostly per heading, not per reading, so more
+/// would not help (data `magnetometer_heading.csv`).
+pub const COMPASS_READINGS: u8 = 20;
+/// A view's readings are taken for at most this long, ms; a lidar that
+/// gave fewer than `LIDAR_READINGS` by then gives the median of what it
+/// gave (none: no distance in that view). Five lidar periods and a
+/// half: room for a dropped reading or two.
+pub const VIEW_LIMIT_MS: u32 = 300;
+/// The robot localizes at power-up (the firmware and the simulator),
+/// turning in place: set false to start at the box's centre, unknown
+/// (`pose` or `locate` then).
+pub const AT_POWER_UP: bool = true;
+/// Views taken before the first search: two views can agree on a
+/// wrong pose far off (`tests/locate.rs`: 75 % right from two, 99.2 %
+/// from three).
+pub const MIN_VIEWS: usize = 3;
+/// The turn in place between views, degrees: two views at 45 degrees
+/// put the beams on walls of both axes from most of the box.
+pub const TURN_DEG: i32 = 45;
+/// Its rate, mrad/s: `goto`'s turn rate (`goto::TURN_MRAD_S`).
+pub const TURN_MRAD_S: i32 = super::goto::TURN_MRAD_S;
+/// The body stands this long after a turn before its view is taken,
+/// ms: the servos stop within a tick (data `servo_runs.csv`), and a
+/// lidar reading begun while turning (33 ms each) is over.
+pub const SETTLE_MS: u32 = 100;
+/// A turn the compass says moved less than this, degrees, was blocked
+/// (the body against a wall): the next turns go the other way.
+pub const BLOCKED_TURN_DEG: i32 = 20;
+/// Grid columns searched per loop tick (a column is 99 points of the
+/// team's box): two take up to 267,000 lx106 instructions (the worst
+/// slice of the search in lx106/BENCHMARKS.md), a third of the 10 ms
+/// tick at 80 MHz and one instruction a cycle (half at 1.5 cycles),
+/// which leaves the tick's own work room; a pass over the box takes 77
+/// ticks (0.8 s).
+pub const COLUMNS_PER_TICK: u32 = 2;
+/// The whole procedure's time limit, ms: eight views (5 s) and a
+/// search that tries every heading (50 passes, 39 s).
+pub const TIME_LIMIT_MS: u32 = 60_000;
