@@ -9,7 +9,7 @@ use crate::config;
 use crate::control::goto::{check_target, Nav, NavStep, Refusal, Target};
 use crate::control::log::RowLog;
 use crate::control::mission::{Mission, Step};
-use crate::control::protocol::number::{push_fixed_parts, push_i32, push_str, push_u32};
+use crate::control::protocol::number::{div_rem_1000, push_fixed_parts, push_i32, push_str, push_u32};
 use crate::control::protocol::{
     format_command, format_row, telemetry_header, Command, MissionOp, Response, TelemetryRow,
 };
@@ -282,7 +282,7 @@ where
             self.run = None;
             self.out.clear();
             let line = push_str(&mut self.out, "# mission done in ")
-                .and_then(|()| push_fixed_parts(&mut self.out, false, elapsed / 1_000, 3))
+                .and_then(|()| push_fixed_parts(&mut self.out, false, div_rem_1000(elapsed).0, 3))
                 .and_then(|()| push_str(&mut self.out, " s; dump sends its log"));
             if line.is_ok() {
                 sink.write_line(&self.out);
