@@ -8,26 +8,11 @@
 //! steerable; 2.5 s median, 9.7 s at the 95th percentile (`cargo test
 //! --release --test localize -- --nocapture` prints the figures).
 
-use paperbot::sim::arena::Arena;
-use paperbot::sim::body::PoseF64;
-use paperbot::sim::noise::Rng;
-use paperbot::sim::realism::Realism;
-use paperbot::sim::robot::{body_fits, SimConfig, SimRobot};
+mod common;
 
-/// A random pose with the whole body in the box.
-fn random_start(rng: &mut Rng) -> PoseF64 {
-    let a = Arena::default();
-    loop {
-        let p = PoseF64::new(
-            rng.range_f64(0.0, a.length_x),
-            rng.range_f64(0.0, a.width_y),
-            rng.range_f64(0.0, std::f64::consts::TAU),
-        );
-        if body_fits(&a, &Realism::LAB, &p) {
-            return p;
-        }
-    }
-}
+use common::rng::{random_pose_in_box, Rng};
+use paperbot::sim::body::PoseF64;
+use paperbot::sim::robot::{SimConfig, SimRobot};
 
 /// How one power-up went.
 struct Run {
@@ -76,7 +61,7 @@ fn the_robot_finds_itself_at_power_up_from_random_starts() {
     let mut wrong_unflagged = vec![];
     let mut seconds = vec![];
     for i in 0..starts {
-        let start = random_start(&mut rng);
+        let start = random_pose_in_box(&mut rng);
         let run = power_up(start, i);
         seconds.push(run.seconds);
         steerable += usize::from(run.steerable);

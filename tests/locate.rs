@@ -3,6 +3,9 @@
 //! (the lidars' cones, their noise and glancing failures, the compass's
 //! noise and disturbance), the search finds the pose.
 
+mod common;
+
+use common::rng::{random_pose_in_box, Rng};
 use paperbot::config;
 use paperbot::math::{Angle, Length};
 use paperbot::model::locate::{locate, Fix, Readings, Search, MAX_VIEWS};
@@ -10,7 +13,6 @@ use paperbot::model::measurement::Arena;
 use paperbot::model::LidarModel;
 use paperbot::sim::arena::Arena as SimArena;
 use paperbot::sim::body::{advance, Kinematics, MotionF64, PoseF64};
-use paperbot::sim::noise::Rng;
 use paperbot::sim::realism::{compass_disturbance, glancing_failure, lidar_range, Realism, Trial};
 use paperbot::sim::robot::body_fits;
 
@@ -38,36 +40,6 @@ fn lidar(
     let mean = (0..n).map(|_| t + along + rng.gauss(config::sim::LIDAR_NOISE_MM)).sum::<f64>() / f64::from(n);
     let raw = model.reading_for(Length::from_mm_f64(mean))?;
     model.range(raw).distance()
-}
-
-/// A random pose with the whole body (wheels, skid, lidars) in the box.
-fn random_pose(rng: &mut Rng) -> PoseF64 {
-    let a = SimArena::default();
-    loop {
-        let p = PoseF64::new(
-            rng.range_f64(0.0, a.length_x),
-            rng.range_f64(0.0, a.width_y),
-            rng.range_f64(0.0, std::f64::consts::TAU),
-        );
-        let d = config::geometry::ROTATION_TO_REFERENCE.to_mm_f64();
-        let (s, c) = p.theta.sin_cos();
-        let (ax, ay) = (p.x - d * c, p.y - d * s);
-        let h = config::sim::HALF_TRACK_MM;
-        let skid = config::geometry::SKID_BEHIND_AXLE.to_mm_f64();
-        let lid = |m| {
-            let (x, y, _) = p.lidar_ray(&m);
-            a.contains(x, y)
-        };
-        if a.contains(p.x, p.y)
-            && a.contains(ax - h * s, ay + h * c)
-            && a.contains(ax + h * s, ay - h * c)
-            && a.contains(ax - skid * c, ay - skid * s)
-            && lid(config::geometry::FRONT_LIDAR)
-            && lid(config::geometry::RIGHT_LIDAR)
-        {
-            return p;
-        }
-    }
 }
 
 /// One view as the firmware takes it at `truth`: the averaged compass
@@ -163,7 +135,7 @@ fn views_turned_in_place_find_the_pose() {
     let (mut two, mut done) = (Tally::default(), Tally::default());
     let mut views_used = [0usize; MAX_VIEWS + 1];
     for _ in 0..starts {
-        let mut truth = random_pose(&mut rng);
+        let mut truth = random_pose_in_box(&mut rng);
         let phase = rng.range_f64(0.0, std::f64::consts::TAU);
         let mut views = vec![view(&truth, phase, &mut rng)];
         let mut degrees = 45.0;
@@ -203,7 +175,7 @@ fn the_search_finds_the_pose_from_random_starts() {
     let starts = 1_000;
     let mut one = Tally::default();
     for _ in 0..starts {
-        let truth = random_pose(&mut rng);
+        let truth = random_pose_in_box(&mut rng);
         let phase = rng.range_f64(0.0, std::f64::consts::TAU);
         let r = view(&truth, phase, &mut rng);
         one.add(locate(&Arena::DEFAULT, &[r]).ok(), &truth);
@@ -228,7 +200,7 @@ fn the_search_a_few_columns_at_a_time_gives_the_same_fix() {
     let mut rng = Rng::new(7);
     let mut steps_seen = Vec::new();
     for start in 0..40 {
-        let mut truth = random_pose(&mut rng);
+        let mut truth = random_pose_in_box(&mut rng);
         let phase = rng.range_f64(0.0, std::f64::consts::TAU);
         let mut views = vec![view(&truth, phase, &mut rng)];
         for _ in 0..2 {
