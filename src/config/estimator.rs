@@ -97,7 +97,7 @@ pub const REACQUIRE_AFTER: u8 = 10;
 /// a settled estimate believes it): 4 re-acquisitions, 1.2 s until
 /// within 20 mm; at 30 mm, 6 steps of 105 mm and 1.5-1.8 s; at 60 mm,
 /// 3 steps of 210 mm and 0.9 s. The realistic simulated hour (worst
-/// 25.1 mm), the soak (90 % of errors below 20 mm) and the real drive's
+/// 24 mm), the soak (90 % of errors below 20 mm) and the real drive's
 /// largest step (4.0-4.2 mm) do not change from 30 to 60 mm.
 pub const REACQUIRE_SIGMA_MM: f64 = 45.0;
 /// The estimate is kept within this distance outside the arena's walls,

@@ -83,7 +83,7 @@ pub enum Step {
 }
 
 /// Where the procedure is.
-// one phase at a time, in a static on the robot: no box (no allocator)
+// one phase at a time, inside the controller: no box (no allocator)
 #[allow(clippy::large_enum_variant)]
 #[derive(Clone, Debug)]
 enum Phase {

@@ -73,9 +73,10 @@ where
     }
 
     /// Ends the procedure: a fix starts the estimator there, with its
-    /// uncertainty; a failure leaves the pose with the config's initial
-    /// uncertainty (unknown: `goto` refuses it) until `pose` or `locate`.
-    /// The robot stands.
+    /// uncertainty, and a `goto` or `face` that waited for it starts; a
+    /// failure leaves the pose with the config's initial uncertainty
+    /// (unknown until `pose` or `locate`) and refuses what waited. The
+    /// robot stands.
     pub(super) fn end_locate(&mut self, result: Result<Fix, Failure>, sink: &mut impl LineSink) {
         if matches!(self.mode, Mode::Locate { .. }) {
             self.mode = Mode::Idle;
