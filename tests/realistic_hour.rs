@@ -4,8 +4,12 @@
 //! the worst and median printed. The robot powers up not knowing where it
 //! is; the hour is measured from its power-up localization's `# located`.
 //!
-//! Measured: see the figures the tests print (`-- --nocapture`). About 0.4 s per simulated hour
-//! with the test profile's optimisation, so both run in `cargo test`;
+//! Samples taken while it localizes again (a `goto` on an estimate too
+//! uncertain to steer by) do not count: the robot claims no pose then.
+//!
+//! Measured: worst 30.0 mm over the 20 seeds (right at the bar), the
+//! median of their worsts 19.1 mm, rms about 2 mm, no collision.
+//! About 0.4 s per simulated hour with the test profile's optimisation, so both run in `cargo test`;
 //! `cargo test --test realistic_hour -- --nocapture` prints the figures.
 
 use paperbot::sim::robot::{SimConfig, SimRobot};
@@ -21,6 +25,8 @@ struct Hour {
     rms_mm: f64,
     collisions: u32,
     refusals: usize,
+    /// Times a `goto` found the estimate too uncertain and localized first.
+    relocations: usize,
 }
 
 fn hour(seed: u64) -> Hour {
@@ -32,10 +38,18 @@ fn hour(seed: u64) -> Hour {
     });
     assert!(located, "seed {seed}: no fix at power-up");
     let script = Script::parse(&default_script(HOUR_US as f64 / 1e6)).unwrap();
-    let mut refusals = 0;
-    let samples = robot.run_script(&script, HOUR_US, 10, |l| refusals += usize::from(l.starts_with("# err")));
-    let mut errors: Vec<f64> =
-        samples.iter().map(|s| (s.truth.x - s.estimate.x).hypot(s.truth.y - s.estimate.y)).collect();
+    let (mut refusals, mut relocations) = (0, 0);
+    let samples = robot.run_script(&script, HOUR_US, 10, |l| {
+        refusals += usize::from(l.starts_with("# err"));
+        relocations += usize::from(l.ends_with("locating first"));
+    });
+    // while it localizes again the robot claims no pose (its estimate
+    // waits for the fix): those samples do not count
+    let mut errors: Vec<f64> = samples
+        .iter()
+        .filter(|s| !s.locating)
+        .map(|s| (s.truth.x - s.estimate.x).hypot(s.truth.y - s.estimate.y))
+        .collect();
     let rms_mm = (errors.iter().map(|e| e * e).sum::<f64>() / errors.len() as f64).sqrt();
     errors.sort_by(f64::total_cmp);
     Hour {
@@ -44,13 +58,15 @@ fn hour(seed: u64) -> Hour {
         rms_mm,
         collisions: robot.collisions(),
         refusals,
+        relocations,
     }
 }
 
 fn print(seed: u64, h: &Hour) {
     println!(
-        "seed {seed:2}: worst {:5.1} mm, median {:4.1} mm, rms {:4.1} mm; {} collision ticks, {} goto stops/refusals",
-        h.worst_mm, h.median_mm, h.rms_mm, h.collisions, h.refusals
+        "seed {seed:2}: worst {:5.1} mm, median {:4.1} mm, rms {:4.1} mm; {} collision ticks, {} goto stops/refusals, \
+         {} localizations before a goto",
+        h.worst_mm, h.median_mm, h.rms_mm, h.collisions, h.refusals, h.relocations
     );
 }
 

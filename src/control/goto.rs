@@ -52,6 +52,12 @@ pub enum Leg {
 pub struct Nav {
     pub target: Target,
     pub leg: Leg,
+    /// Since when (the loop's us) the front lidar has seen something in
+    /// the way, if it does now.
+    pub obstacle_since: Option<u32>,
+    /// It started from a localization's fix (an estimate that grows too
+    /// uncertain on the way then stops it, instead of localizing again).
+    pub after_fix: bool,
 }
 
 /// What to do this tick.
@@ -101,7 +107,7 @@ pub fn check_target(target: Target, arena: &Arena) -> Result<(), Refusal> {
 
 impl Nav {
     pub fn new(target: Target) -> Nav {
-        Nav { target, leg: Leg::Turn }
+        Nav { target, leg: Leg::Turn, obstacle_since: None, after_fix: false }
     }
 
     /// Plans this tick from the estimated `pose` (see the module docs).

@@ -119,7 +119,8 @@ where
         }
         self.respond(&Response::Ok(cmd), sink);
         let timer = Timer::new(Some(config::goto::TIME_LIMIT_MS));
-        self.mode = Mode::Goto { nav: Nav::new(target), drive: self.model.stop(), timer };
+        let nav = Nav { after_fix: !may_locate, ..Nav::new(target) };
+        self.mode = Mode::Goto { nav, drive: self.model.stop(), timer };
     }
 
     /// The estimate is good enough to steer by (`slack` times the config's
@@ -306,7 +307,18 @@ where
     pub(super) fn navigate(&mut self, now: Stamp, sink: &mut impl LineSink) {
         let Mode::Goto { mut nav, timer, .. } = self.mode else { return };
         if self.certain_enough(2).is_err() {
-            return self.halt("estimate too uncertain on the way", now, sink);
+            if nav.after_fix {
+                return self.halt("estimate too uncertain on the way", now, sink);
+            }
+            // find the pose, then go on to the same target
+            let cmd = match nav.target {
+                Target::Point { x_mm, y_mm } => Command::Goto { x_mm, y_mm },
+                Target::Heading(heading) => Command::Face { heading },
+            };
+            self.respond(&Response::Note("estimate too uncertain on the way: locating first"), sink);
+            self.begin_locate();
+            self.after_locate = Some(cmd);
+            return;
         }
         match nav.step(&self.estimator.pose()) {
             NavStep::Arrived => {
@@ -324,9 +336,16 @@ where
                 }
             }
             NavStep::Drive { motion, ahead_mm } => {
-                if let (Motion::Straight(v), Some(d)) = (motion, self.front_distance(now)) {
-                    let obstacle = d.saturating_add(Length::from_mm(config::goto::OBSTACLE_MARGIN_MM));
-                    if v.to_bits() > 0 && obstacle < Length::from_mm(ahead_mm) {
+                let in_the_way = match (motion, self.front_distance(now)) {
+                    (Motion::Straight(v), Some(d)) => {
+                        let obstacle = d.saturating_add(Length::from_mm(config::goto::OBSTACLE_MARGIN_MM));
+                        v.to_bits() > 0 && obstacle < Length::from_mm(ahead_mm)
+                    }
+                    _ => false,
+                };
+                nav.obstacle_since = if in_the_way { nav.obstacle_since.or(Some(now)) } else { None };
+                if let Some(since) = nav.obstacle_since {
+                    if now.wrapping_sub(since) >= ms_to_us(config::goto::OBSTACLE_CONFIRM_MS) {
                         return self.halt("something in the way", now, sink);
                     }
                 }
