@@ -9,7 +9,8 @@
 //!
 //! Measured: worst 30.0 mm over the 20 seeds (right at the bar), the
 //! median of their worsts 19.1 mm, rms about 2 mm, no collision.
-//! About 0.4 s per simulated hour with the test profile's optimisation, so both run in `cargo test`;
+//! About 0.4 s per simulated hour with the test profile's optimisation, so
+//! both run in `cargo test`;
 //! `cargo test --test realistic_hour -- --nocapture` prints the figures.
 
 use paperbot::sim::robot::{SimConfig, SimRobot};
