@@ -130,9 +130,7 @@ fn lidar_rays<'a>(samples: &[replay::Sample], estimates: &[replay::Estimate]) ->
         ] {
             let Some(d) = reading.and_then(|r| model.range(r).distance()) else { continue };
             let (x, y, dir) = pose.lidar_ray(&mount);
-            let (bs, bc) = mount.direction.to_radians_f64().sin_cos();
-            let setback = -(mount.forward.to_mm_f64() * bc + mount.right.to_mm_f64() * bs);
-            let range = d.to_mm_f64() + setback;
+            let range = d.to_mm_f64() - PoseF64::along_beam_mm(&mount);
             rays.push(Ray { from: (x, y), to: (x + range * dir.cos(), y + range * dir.sin()), color });
         }
     }

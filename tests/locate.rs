@@ -13,8 +13,8 @@ use paperbot::model::measurement::Arena;
 use paperbot::model::LidarModel;
 use paperbot::sim::arena::Arena as SimArena;
 use paperbot::sim::body::{advance, Kinematics, MotionF64, PoseF64};
-use paperbot::sim::realism::{compass_disturbance, glancing_failure, lidar_range, Realism, Trial};
-use paperbot::sim::robot::body_fits;
+use paperbot::sim::realism::{compass_disturbance, Realism, Trial};
+use paperbot::sim::robot::{body_fits, lidar_truth};
 
 /// One averaged lidar reading as the firmware sees it (the model output of
 /// the mean of `n` raw readings), or `None` when the reading failed.
@@ -24,20 +24,9 @@ fn lidar(
     model: &LidarModel,
     rng: &mut Rng,
 ) -> Option<Length> {
-    let r = Realism::LAB;
-    let a = SimArena::default();
-    let mount = which.mount();
-    let (x, y, dir) = p.lidar_ray(&mount);
-    let (t, incidence) = lidar_range(&a, x, y, dir, &r)?;
-    let t = match glancing_failure(incidence, &r, rng) {
-        None => t,
-        Some(None) => return None,
-        Some(Some(f)) => t * f,
-    };
-    let (bs, bc) = mount.direction.to_radians_f64().sin_cos();
-    let along = mount.forward.to_mm_f64() * bc + mount.right.to_mm_f64() * bs;
+    let d = lidar_truth(&SimArena::default(), &Realism::LAB, p, &which.mount(), rng)?;
     let n = config::locate::LIDAR_READINGS;
-    let mean = (0..n).map(|_| t + along + rng.gauss(config::sim::LIDAR_NOISE_MM)).sum::<f64>() / f64::from(n);
+    let mean = (0..n).map(|_| d + rng.gauss(config::sim::LIDAR_NOISE_MM)).sum::<f64>() / f64::from(n);
     let raw = model.reading_for(Length::from_mm_f64(mean))?;
     model.range(raw).distance()
 }

@@ -53,6 +53,13 @@ impl PoseF64 {
         // in (x north, y east) the heading is (cos, sin) and the car's right (-sin, cos)
         (self.x + f * c - r * s, self.y + f * s + r * c, self.theta + mount.direction.to_radians_f64())
     }
+    /// How far a lidar mounted at `mount` sits ahead of the reference
+    /// point along its own beam, mm (the lidar model's distance is the
+    /// range from the mount plus this).
+    pub fn along_beam_mm(mount: &LidarMount) -> f64 {
+        let (bs, bc) = mount.direction.to_radians_f64().sin_cos();
+        mount.forward.to_mm_f64() * bc + mount.right.to_mm_f64() * bs
+    }
     /// Signed heading difference `self - other`, radians in (-pi, pi].
     pub fn heading_error(&self, other: &PoseF64) -> f64 {
         wrap_pi(self.theta - other.theta)

@@ -360,23 +360,27 @@ pub fn body_fits(a: &Arena, realism: &Realism, p: &PoseF64) -> bool {
         && lidar_in(&config::geometry::RIGHT_LIDAR)
 }
 
+/// What a lidar at `mount` on the body at `p` measures before its noise:
+/// the distance from the reference point along the beam (the lidar
+/// model's output) to the nearest wall in its cone, with a glancing
+/// reading's failure drawn from `rng`; `None` for "no target".
+pub fn lidar_truth(arena: &Arena, realism: &Realism, p: &PoseF64, mount: &LidarMount, rng: &mut Rng) -> Option<f64> {
+    let (x, y, dir) = p.lidar_ray(mount);
+    let (t, incidence) = lidar_range(arena, x, y, dir, realism)?;
+    let t = match glancing_failure(incidence, realism, rng) {
+        None => t,
+        Some(None) => return None,
+        Some(Some(factor)) => t * factor,
+    };
+    Some(t + PoseF64::along_beam_mm(mount))
+}
+
 /// Sets the fake chips' truth for the body at `p`.
 pub fn set_truth(sensors: &SimSensors, cfg: &SimConfig, p: &PoseF64, rng: &mut Rng, disturbance_phase: f64) {
     let no_target = crate::model::lidar::NO_TARGET_READING;
     let lidar = |mount: &LidarMount, model: &LidarModel, rng: &mut Rng| -> u16 {
-        let (x, y, dir) = p.lidar_ray(mount);
-        let Some((t, incidence)) = lidar_range(&cfg.arena, x, y, dir, &cfg.realism) else { return no_target };
-        let t = match glancing_failure(incidence, &cfg.realism, rng) {
-            None => t,
-            Some(None) => return no_target,
-            Some(Some(factor)) => t * factor,
-        };
-        // the model gives the distance from the reference point along the
-        // beam: the range from the mount plus how far the mount sits ahead
-        // of the reference point along its own beam
-        let (bs, bc) = mount.direction.to_radians_f64().sin_cos();
-        let along = mount.forward.to_mm_f64() * bc + mount.right.to_mm_f64() * bs;
-        let distance = t + along + rng.gauss(cfg.noise.lidar_mm);
+        let Some(d) = lidar_truth(&cfg.arena, &cfg.realism, p, mount, rng) else { return no_target };
+        let distance = d + rng.gauss(cfg.noise.lidar_mm);
         model.reading_for(Length::from_mm_f64(distance)).unwrap_or(0).min(no_target)
     };
     let front = lidar(&config::geometry::FRONT_LIDAR, &config::lidar::FRONT, rng);
