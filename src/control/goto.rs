@@ -92,6 +92,14 @@ impl Refusal {
     }
 }
 
+/// One-sigma position uncertainties `x`, `y` small enough to steer by:
+/// `slack` times [`cfg::MAX_SIGMA_MM`] (1 to start, 2 on the way, as the
+/// uncertainty breathes between corrections).
+pub fn position_steerable(x: crate::math::Length, y: crate::math::Length, slack: i32) -> bool {
+    let limit = crate::math::Length::from_mm(cfg::MAX_SIGMA_MM.saturating_mul(slack));
+    x <= limit && y <= limit
+}
+
 /// Checks a target against the arena's walls (a heading always passes).
 pub fn check_target(target: Target, arena: &Arena) -> Result<(), Refusal> {
     let Target::Point { x_mm, y_mm } = target else { return Ok(()) };

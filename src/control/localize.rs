@@ -30,6 +30,7 @@
 
 use crate::config::locate as cfg;
 use crate::config::timing::LOOP_HZ;
+use crate::control::goto::position_steerable;
 use crate::math::{div_i64, Angle, Length};
 use crate::model::locate::{Fix, LocateError, Readings, Search, MAX_VIEWS};
 use crate::model::measurement::{Arena, LidarId};
@@ -274,7 +275,10 @@ impl Procedure {
     fn searched(&mut self, result: Result<Fix, Failure>) -> Step {
         let last_view = self.count >= MAX_VIEWS;
         match result {
-            Ok(fix) if (!fix.ambiguous && steerable(&fix)) || last_view => Step::Done(Ok(fix)),
+            // (the fix's heading is the compass's, within goto's limit)
+            Ok(fix) if (!fix.ambiguous && position_steerable(fix.sigma_x, fix.sigma_y, 1)) || last_view => {
+                Step::Done(Ok(fix))
+            }
             Err(e) if last_view => Step::Done(Err(e)),
             _ => self.enter(Phase::Turn),
         }
@@ -285,10 +289,4 @@ impl Procedure {
         self.ticks = 0;
         Step::Stand
     }
-}
-
-/// The fix is certain enough for `goto` to steer by ([`crate::config::goto::MAX_SIGMA_MM`]).
-fn steerable(fix: &Fix) -> bool {
-    let limit = Length::from_mm(crate::config::goto::MAX_SIGMA_MM);
-    fix.sigma_x <= limit && fix.sigma_y <= limit
 }

@@ -6,7 +6,7 @@ use super::clock::{ms_to_us, reached, Stamp, Timer};
 use super::health::Which;
 use super::{telemetry_period_us, Controller, LineSink, Mode};
 use crate::config;
-use crate::control::goto::{check_target, Nav, NavStep, Refusal, Target};
+use crate::control::goto::{check_target, position_steerable, Nav, NavStep, Refusal, Target};
 use crate::control::log::RowLog;
 use crate::control::mission::{Mission, Step};
 use crate::control::protocol::number::{div_rem_1000, push_fixed_parts, push_i32, push_str, push_u32};
@@ -128,10 +128,9 @@ where
     /// between corrections).
     fn certain_enough(&self, slack: i32) -> Result<(), Refusal> {
         let sigma = self.estimator.sigma();
-        let mm = Length::from_mm(config::goto::MAX_SIGMA_MM.saturating_mul(slack));
         let heading = Angle::from_millidegrees(config::goto::MAX_SIGMA_MDEG.saturating_mul(slack));
         // a one-sigma heading is small and positive: compare the LSBs
-        if sigma.x > mm || sigma.y > mm || sigma.theta.0 > heading.0 {
+        if !position_steerable(sigma.x, sigma.y, slack) || sigma.theta.0 > heading.0 {
             Err(Refusal::Uncertain)
         } else {
             Ok(())
