@@ -768,7 +768,7 @@ fn a_motion_outside_the_servos_range_is_answered_with_what_is_driven() {
     assert_eq!(out.take(), ["# ok fwd 0.130"]);
 }
 
-/// The ranges the README and `config::serial` give for what the servos
+/// The ranges docs/protocol.md and `config::serial` give for what the servos
 /// drive with no trim: each end is what a request past it is answered with.
 #[test]
 fn the_documented_drivable_ranges_are_the_models() {

@@ -1,5 +1,5 @@
-//! Commands: the grammar (see the module docs of [`super`]), the parser and
-//! the canonical form that `ok` responses echo.
+//! Commands: the parser and the canonical form that `ok` responses echo
+//! (the grammar is in `docs/protocol.md`).
 
 use super::number::{parse_fixed, push_fixed, push_fixed_parts, push_str, push_u32, NumError, TextOut};
 use super::{Overflow, MAX_LINE};
