@@ -1,5 +1,5 @@
 //! Fits the lab's measurements and prints constants ready to paste into
-//! `src/config.rs`.
+//! `config::actuators` or `config::lidar` (`src/config/`).
 //!
 //! ```text
 //! cargo run --example fit -- tests/data/lab1/servo_runs.csv

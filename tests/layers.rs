@@ -74,7 +74,7 @@ fn violations() -> Vec<String> {
     let mut found = Vec::new();
     for path in files {
         let rel = path.strip_prefix(&src).expect("under src");
-        // the module is the first path component (`model/...`, `config.rs`)
+        // the module is the first path component (`model/...`, `config/...`)
         let first = rel.components().next().expect("a component").as_os_str().to_string_lossy().into_owned();
         let module = first.trim_end_matches(".rs").to_owned();
         if module == "lib" || module == "bin" {

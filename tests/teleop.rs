@@ -90,7 +90,7 @@ fn report_range(left: (f64, f64, f64, f64), right: (f64, f64, f64, f64), scale: 
 fn speed_ranges_are_the_measured_ranges_of_the_report() {
     let s = Speeds::from_config();
     let r = 20.0; // wheel radius, mm
-                  // (kind, left line + commands, right line + commands, scale to mm/s or mrad/s): PAPERBOT's table
+                  // (kind, left line + commands, right line + commands, scale to mm/s or mrad/s): the fact sheet's table (docs/paperbot.md)
     let table = [
         (MotionKind::Forward, (0.14, -8.205, 103.0, 112.0), (-0.146, 15.85, 57.0, 66.0), r),
         (MotionKind::Backward, (-0.205, 19.77, 58.0, 70.0), (0.195, -13.95, 99.0, 111.0), r),

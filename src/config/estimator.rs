@@ -9,7 +9,7 @@ use super::Length;
 /// of the report's lines over all readings 1.86 mm front, 1.70 mm right).
 pub const LIDAR_SIGMA: Length = Length::from_mm_f64(2.0);
 /// Spread of the calibrated compass heading, degrees (data
-/// `magnetometer_heading.csv`, PAPERBOT: about 2.5 degrees).
+/// `magnetometer_heading.csv`, fact sheet: about 2.5 degrees).
 pub const COMPASS_SIGMA_DEG: f64 = 2.5;
 /// Relative spread of the car's speed going straight (std/mean of the
 /// timed runs of one command pair; data `servo_runs.csv`: rms over the
@@ -26,7 +26,7 @@ pub const SPEED_CORRELATION_MM: f64 = 450.0;
 /// drives the estimator is tested on turn by quarter turns).
 pub const TURN_CORRELATION_DEG: f64 = 90.0;
 /// A turn in place does not pivot exactly about the axle: the paper skid
-/// drags (PAPERBOT) and moves the pivot by this much, one sigma, mm. The
+/// drags (fact sheet) and moves the pivot by this much, one sigma, mm. The
 /// estimator adds it as position noise across the car per angle turned
 /// (a random walk over `TURN_CORRELATION_DEG`), so after a turn it
 /// follows the lidars instead of gating them out. The simulator's pivot

@@ -6,7 +6,7 @@
 pub const LIDAR_NOISE_MM: f64 = 1.6;
 /// Compass heading noise (one sigma), degrees: the spread of the lab's
 /// check against a printed compass (data `magnetometer_heading.csv`,
-/// PAPERBOT: about 2.5 degrees).
+/// fact sheet: about 2.5 degrees).
 pub const COMPASS_NOISE_DEG: f64 = 2.5;
 /// Straight speed noise per loop tick (one sigma), fraction of the
 /// speed: white noise on top of the fitted lines (averages to about 1%
@@ -42,7 +42,7 @@ pub const HALF_TRACK_MM: f64 = 42.5;
 pub const SPEED_SPREAD: [f64; 4] = [0.019, 0.025, 0.026, 0.011];
 /// A turn in place pivots about a point this far behind the axle's
 /// midpoint on average, mm: the paper skid drags ~70 mm behind the axle
-/// (PAPERBOT) and holds the tail back. Not measured (the lab timed turns
+/// (fact sheet) and holds the tail back. Not measured (the lab timed turns
 /// only); 10 mm, a seventh of the way to the skid, is an assumption.
 pub const PIVOT_BEHIND_AXLE_MM: f64 = 10.0;
 /// Spread of that point from turn to turn, one sigma, mm (assumed, as

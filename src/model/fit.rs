@@ -208,8 +208,8 @@ pub fn heading_error_deg(a: f64, b: f64) -> f64 {
 }
 
 /// Fits a lab CSV (recognised by its header) and renders the result as
-/// constants ready to paste into `src/config.rs`. `path` names the lidar
-/// (front/right).
+/// constants ready to paste into `config::actuators` or `config::lidar`.
+/// `path` names the lidar (front/right).
 pub fn config_constants(text: &str, path: &str) -> Result<String, String> {
     let header = text.lines().next().unwrap_or("").trim();
     if header == SERVO_RUNS_HEADER.join(",") {

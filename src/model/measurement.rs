@@ -1,7 +1,7 @@
 //! The arena measurement model: what the two lidars and the compass should
 //! read for a pose in a rectangular box.
 //!
-//! Frame (PAPERBOT): origin at a corner of the box, x to north along the
+//! Frame (fact sheet, `docs/paperbot.md`): origin at a corner of the box, x to north along the
 //! box's `length_x`, y to east along its `width_y`, heading clockwise from
 //! north. The walls are `x = 0` (south), `x = length_x` (north), `y = 0`
 //! (west) and `y = width_y` (east).

@@ -27,7 +27,7 @@
 //! that has its samples but not its sectors keeps collecting, up to
 //! [`config::compass::CALIBRATION_EXTRA_SAMPLES`] more (so `cal 250`, one
 //! turn's samples, ends within about two turns). [`ConfigLine`] prints the
-//! result as a line to paste into `src/config.rs`.
+//! result as a line to paste into `config::compass` (`src/config/compass.rs`).
 
 use core::fmt;
 

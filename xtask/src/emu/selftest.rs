@@ -3,7 +3,7 @@
 //! virtual time (the event log). Prints one line per check and a closing
 //! `N passed, N failed`; fails when any check does.
 //!
-//! Expected figures come from src/config.rs (read at run time, so a tuned
+//! Expected figures come from the config's files, src/config/ (read at run time, so a tuned
 //! constant moves the check with it), not from copies here.
 
 use std::path::Path;
@@ -50,7 +50,7 @@ impl Report {
     }
 }
 
-/// The numbers the checks need from src/config.rs.
+/// The numbers the checks need from the config (src/config/).
 pub(super) struct Expect {
     banner: String,
     pub(super) deadman_ns: u64,
@@ -62,8 +62,8 @@ pub(super) struct Expect {
 
 impl Expect {
     pub(super) fn load(root: &Path) -> Result<Self, String> {
-        let config = String::from_utf8_lossy(&read(&root.join("src/config.rs"))?).into_owned();
-        let get = |name: &str| config_u32(&config, name).ok_or(format!("src/config.rs has no `const {name}: u32`"));
+        let config = config_source(root)?;
+        let get = |name: &str| config_u32(&config, name).ok_or(format!("src/config/ has no `const {name}: u32`"));
         Ok(Expect {
             banner: banner(root)?,
             deadman_ns: u64::from(get("DEADMAN_MS")?) * MS,
@@ -78,6 +78,22 @@ impl Expect {
     pub(super) fn width_us(&self, steps: f64) -> f64 {
         self.pulse_at_0_us + (self.pulse_at_180_us - self.pulse_at_0_us) * steps / 180.0
     }
+}
+
+/// The config's source: every file of src/config/, in name order.
+pub(super) fn config_source(root: &Path) -> Result<String, String> {
+    let dir = root.join("src/config");
+    let mut files: Vec<_> = std::fs::read_dir(&dir)
+        .map_err(|e| format!("{}: {e}", dir.display()))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "rs"))
+        .collect();
+    files.sort();
+    let mut source = String::new();
+    for f in files {
+        source.push_str(&String::from_utf8_lossy(&read(&f)?));
+    }
+    Ok(source)
 }
 
 /// `pub const NAME: u32 = 1_000;` in the config's source.

@@ -13,7 +13,7 @@ use std::path::Path;
 
 use super::events::{summarize, Events};
 use super::qemu::Board;
-use super::selftest::{Expect, Report};
+use super::selftest::{config_source, Expect, Report};
 use super::sim::{self, SimOptions, SimRun};
 
 const MS: u64 = 1_000_000;
@@ -94,7 +94,7 @@ pub fn run(root: &Path, board: &Board, work: &Path, flash: &Path) -> Result<(), 
 
     // bring-up and the built-in 20 s drive
     let drive = go("drive", SimOptions { seconds: 20.0, ..SimOptions::default() })?;
-    let config = std::fs::read_to_string(root.join("src/config.rs")).map_err(|e| format!("src/config.rs: {e}"))?;
+    let config = config_source(root)?;
     let addr = |name: &str| {
         let prefix = format!("pub const {name}: u8 = 0x");
         config.lines().find_map(|l| l.trim().strip_prefix(&prefix)?.strip_suffix(';').map(str::to_lowercase))

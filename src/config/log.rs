@@ -1,0 +1,14 @@
+//! The on-board log (`control::log`): telemetry rows kept in RAM during a
+//! mission, dumped with `dump`.
+
+/// Rows kept (a ring: when it is full the oldest row goes and is
+/// counted as dropped). 60 bytes each, in the firmware's DRAM budget
+/// (24 KiB, of which the rest of the firmware takes 8 KB): 200 rows
+/// are 12 KB, 50 s at 4 Hz.
+pub const ROWS: usize = 200;
+/// Rows per second at boot (`log <Hz>` changes it, 0 = off): a row
+/// every 250 ms is every 40 mm at 0.15 m/s.
+pub const HZ: u16 = 4;
+/// Rows written per loop tick while dumping: one row (about 110 bytes)
+/// every 10 ms is 11 kB/s, what the UART carries (115200 baud).
+pub const DUMP_ROWS_PER_TICK: u8 = 1;
