@@ -15,6 +15,25 @@ use paperbot::driver::compass::Compass;
 use paperbot::driver::{HeadingSensor, MagCalibrate, SensorError};
 use paperbot::model::compass::{apply_asa, MagCounts};
 
+/// The one register map of each chip (`driver::compass::{mpu, ak}`, which
+/// the driver, the fake chip and these scripts use) against the datasheets'
+/// numbers: MPU-9250 register map rev 1.6, AK8963 datasheet section 8.
+#[test]
+fn the_register_maps_are_the_datasheets() {
+    use paperbot::driver::compass::{ak, mpu};
+    let mpu_map = [mpu::WHO_AM_I, mpu::PWR_MGMT_1, mpu::PWR_MGMT_2, mpu::USER_CTRL, mpu::INT_PIN_CFG];
+    assert_eq!(mpu_map, [0x75, 0x6B, 0x6C, 0x6A, 0x37]);
+    let mpu_bits = [mpu::H_RESET, mpu::CLKSEL_AUTO, mpu::DISABLE_ACCEL_GYRO, mpu::BYPASS_EN, mpu::I2C_MST_EN];
+    assert_eq!(mpu_bits, [0x80, 0x01, 0x3F, 0x02, 0x20]);
+    assert_eq!((mpu::MPU9250_ID, mpu::MPU9255_ID), (0x71, 0x73));
+    let ak_map = [ak::WIA, ak::INFO, ak::ST1, ak::HXL, ak::HZH, ak::ST2, ak::CNTL1, ak::CNTL2, ak::ASAX, ak::ASAZ];
+    assert_eq!(ak_map, [0x00, 0x01, 0x02, 0x03, 0x08, 0x09, 0x0A, 0x0B, 0x10, 0x12]);
+    let ak_bits = [ak::DEVICE_ID, ak::DRDY, ak::DOR, ak::HOFL, ak::BITM, ak::BIT_16, ak::SRST];
+    assert_eq!(ak_bits, [0x48, 0x01, 0x02, 0x08, 0x10, 0x10, 0x01]);
+    let modes = [ak::MODE_POWER_DOWN, ak::MODE_SINGLE, ak::MODE_CONT1_8HZ, ak::MODE_CONT2_100HZ, ak::MODE_FUSE_ROM];
+    assert_eq!(modes, [0x00, 0x01, 0x02, 0x06, 0x0F]);
+}
+
 #[test]
 fn bring_up_is_the_exact_sequence() {
     done(new_compass(&[]));

@@ -27,18 +27,34 @@
 
 use embedded_hal::delay::DelayNs;
 use embedded_hal::i2c::I2c;
-use mpu9250::{Device, I2CError, I2cDevice, MpuXDevice, Register};
+use mpu9250::{Device, I2CError, I2cDevice, Register};
 
 use super::bus::{classify, Eh0Compat, Retry};
 use super::{CompassSample, HeadingSensor, MagCalibrate, SensorError};
 use crate::config;
 use crate::model::compass::{CompassModel, MagCalibration, MagCounts};
 
-/// MPU9250 register bits used here (register map rev 1.6).
-pub mod mpu_bits {
+/// The MPU9250's registers and bits used here (MPU-9250 register map rev
+/// 1.6): the one map of the chip, which the fake chip (`sim::mpu9250`) and
+/// the tests' transaction scripts use too. The addresses are the `mpu9250`
+/// crate's `Register`, which the driver writes through, and its
+/// identities are the crate's `MpuXDevice`.
+pub mod mpu {
+    use mpu9250::{MpuXDevice, Register};
+
+    pub const WHO_AM_I: u8 = Register::WHO_AM_I as u8;
+    pub const PWR_MGMT_1: u8 = Register::PWR_MGMT_1 as u8;
+    pub const PWR_MGMT_2: u8 = Register::PWR_MGMT_2 as u8;
+    pub const USER_CTRL: u8 = Register::USER_CTRL as u8;
+    pub const INT_PIN_CFG: u8 = Register::INT_PIN_CFG as u8;
+    /// WHO_AM_I of an MPU9250.
+    pub const MPU9250_ID: u8 = MpuXDevice::MPU9250 as u8;
+    /// WHO_AM_I of an MPU9255 (the same magnetometer).
+    pub const MPU9255_ID: u8 = MpuXDevice::MPU9255 as u8;
     /// PWR_MGMT_1: device reset.
     pub const H_RESET: u8 = 0x80;
-    /// PWR_MGMT_1: clock auto-select (PLL if ready, else internal).
+    /// PWR_MGMT_1: clock auto-select (PLL if ready, else internal); also
+    /// the register's value after a reset.
     pub const CLKSEL_AUTO: u8 = 0x01;
     /// PWR_MGMT_2: all accelerometer and gyroscope axes disabled.
     pub const DISABLE_ACCEL_GYRO: u8 = 0x3F;
@@ -46,17 +62,27 @@ pub mod mpu_bits {
     pub const BYPASS_EN: u8 = 0x02;
     /// USER_CTRL: nothing (I2C master off, FIFO off).
     pub const USER_CTRL_NONE: u8 = 0x00;
+    /// USER_CTRL: the chip's own I2C master on (the AK8963 then leaves the
+    /// host bus even in bypass).
+    pub const I2C_MST_EN: u8 = 0x20;
 }
 
-/// AK8963 registers and bits (datasheet, section 8).
+/// The AK8963's registers and bits (AK8963 datasheet, section 8): the one
+/// map of the chip, shared as [`mpu`] is.
 pub mod ak {
     pub const WIA: u8 = 0x00;
+    pub const INFO: u8 = 0x01;
     pub const ST1: u8 = 0x02;
+    /// The first of the six data registers (X, Y, Z, little-endian).
     pub const HXL: u8 = 0x03;
+    /// The last data register.
+    pub const HZH: u8 = 0x08;
     pub const ST2: u8 = 0x09;
     pub const CNTL1: u8 = 0x0A;
     pub const CNTL2: u8 = 0x0B;
+    /// The fuse ROM's sensitivity adjustment, X (Y and Z follow).
     pub const ASAX: u8 = 0x10;
+    pub const ASAZ: u8 = 0x12;
     /// WIA value (device ID of AKM).
     pub const DEVICE_ID: u8 = 0x48;
     /// ST1: data ready.
@@ -68,6 +94,7 @@ pub mod ak {
     /// ST2: output is 16-bit.
     pub const BITM: u8 = 0x10;
     /// CNTL1 modes (bits 3:0).
+    pub const MODE_MASK: u8 = 0x0F;
     pub const MODE_POWER_DOWN: u8 = 0x00;
     pub const MODE_SINGLE: u8 = 0x01;
     pub const MODE_CONT1_8HZ: u8 = 0x02;
@@ -124,16 +151,16 @@ impl<I2C: I2c, D: DelayNs> Compass<I2C, D> {
     fn init_mpu(&mut self) -> Result<(), SensorError> {
         let mut mpu = I2cDevice::new(Eh0Compat(Retry::with_config(&mut self.i2c)));
         let who = Device::read(&mut mpu, Register::WHO_AM_I).map_err(mpu_error)?;
-        if who != MpuXDevice::MPU9250 as u8 && who != MpuXDevice::MPU9255 as u8 {
+        if who != mpu::MPU9250_ID && who != mpu::MPU9255_ID {
             return Err(SensorError::Missing);
         }
-        Device::write(&mut mpu, Register::PWR_MGMT_1, mpu_bits::H_RESET).map_err(mpu_error)?;
+        Device::write(&mut mpu, Register::PWR_MGMT_1, mpu::H_RESET).map_err(mpu_error)?;
         self.delay.delay_us(config::compass::MPU_RESET_TIME_US);
         let mut mpu = I2cDevice::new(Eh0Compat(Retry::with_config(&mut self.i2c)));
-        Device::write(&mut mpu, Register::PWR_MGMT_1, mpu_bits::CLKSEL_AUTO).map_err(mpu_error)?;
-        Device::write(&mut mpu, Register::PWR_MGMT_2, mpu_bits::DISABLE_ACCEL_GYRO).map_err(mpu_error)?;
-        Device::write(&mut mpu, Register::USER_CTRL, mpu_bits::USER_CTRL_NONE).map_err(mpu_error)?;
-        Device::write(&mut mpu, Register::INT_PIN_CFG, mpu_bits::BYPASS_EN).map_err(mpu_error)
+        Device::write(&mut mpu, Register::PWR_MGMT_1, mpu::CLKSEL_AUTO).map_err(mpu_error)?;
+        Device::write(&mut mpu, Register::PWR_MGMT_2, mpu::DISABLE_ACCEL_GYRO).map_err(mpu_error)?;
+        Device::write(&mut mpu, Register::USER_CTRL, mpu::USER_CTRL_NONE).map_err(mpu_error)?;
+        Device::write(&mut mpu, Register::INT_PIN_CFG, mpu::BYPASS_EN).map_err(mpu_error)
     }
 
     /// A register write, retried on a failure (idempotent).

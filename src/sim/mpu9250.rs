@@ -1,5 +1,7 @@
 //! A register-level fake MPU9250 with its AK8963 magnetometer.
 //!
+//! Its registers are the driver's map (`driver::compass::{mpu, ak}`).
+//!
 //! MPU9250 (at 0x68): WHO_AM_I (0x71), PWR_MGMT_1 with device reset
 //! (H_RESET, which also clears bypass), PWR_MGMT_2, USER_CTRL, INT_PIN_CFG.
 //! With INT_PIN_CFG BYPASS_EN set and the I2C master off (USER_CTRL
@@ -23,21 +25,19 @@ use std::cell::RefCell;
 use std::rc::Rc;
 
 use super::bus::{I2cTarget, SimClock};
+use crate::config::i2c::{AK8963_ADDR as AK_ADDR, MPU9250_ADDR as MPU_ADDR};
+use crate::driver::compass::{ak, mpu};
 
-pub const MPU_ADDR: u8 = 0x68;
-pub const AK_ADDR: u8 = 0x0C;
-/// WHO_AM_I of the MPU9250.
-pub const MPU9250_ID: u8 = 0x71;
 /// |X| + |Y| + |Z| at or above this (16-bit counts, 4912 uT at 0.15 uT per
 /// count) sets HOFL (AK8963 datasheet 6.4.3.2).
 pub const OVERFLOW_SUM: i32 = 32_747;
 
-const PWR_MGMT_1: usize = 0x6B;
-const USER_CTRL: usize = 0x6A;
-const INT_PIN_CFG: usize = 0x37;
-const WHO_AM_I: usize = 0x75;
-const I2C_MST_EN: u8 = 0x20;
-const BYPASS_EN: u8 = 0x02;
+/// What INFO reads (device information for AKM's use; any value).
+const AK_INFO: u8 = 0x9A;
+const PWR_MGMT_1: usize = mpu::PWR_MGMT_1 as usize;
+const USER_CTRL: usize = mpu::USER_CTRL as usize;
+const INT_PIN_CFG: usize = mpu::INT_PIN_CFG as usize;
+const WHO_AM_I: usize = mpu::WHO_AM_I as usize;
 
 /// The AK8963 inside the package.
 pub struct FakeAk8963 {
@@ -116,9 +116,9 @@ impl FakeAk8963 {
     }
 
     fn period_ns(&self) -> Option<u64> {
-        match self.cntl1 & 0x0F {
-            0x02 => Some(125_000_000), // continuous 1: 8 Hz
-            0x06 => Some(10_000_000),  // continuous 2: 100 Hz
+        match self.cntl1 & ak::MODE_MASK {
+            ak::MODE_CONT1_8HZ => Some(125_000_000),  // 8 Hz
+            ak::MODE_CONT2_100HZ => Some(10_000_000), // 100 Hz
             _ => None,
         }
     }
@@ -134,7 +134,7 @@ impl FakeAk8963 {
     }
 
     fn measure(&mut self) {
-        let bit16 = self.cntl1 & 0x10 != 0;
+        let bit16 = self.cntl1 & ak::BIT_16 != 0;
         let sum: i32 = self.field.iter().map(|v| i32::from(*v).abs()).sum();
         let hofl = self.overflow || sum >= OVERFLOW_SUM;
         for (i, v) in self.field.iter().enumerate() {
@@ -143,51 +143,53 @@ impl FakeAk8963 {
             self.data[2 * i] = lo;
             self.data[2 * i + 1] = hi;
         }
-        if self.st1 & 0x01 != 0 {
-            self.st1 |= 0x02; // DOR: the previous sample was never read
+        if self.st1 & ak::DRDY != 0 {
+            self.st1 |= ak::DOR; // the previous sample was never read
         }
-        self.st1 |= 0x01;
-        self.st2 = (if hofl { 0x08 } else { 0 }) | (if bit16 { 0x10 } else { 0 });
+        self.st1 |= ak::DRDY;
+        self.st2 = (if hofl { ak::HOFL } else { 0 }) | (if bit16 { ak::BITM } else { 0 });
         self.samples += 1;
     }
 
     fn reg_read(&mut self, r: u8) -> u8 {
         match r {
-            0x00 => 0x48,
-            0x01 => 0x9A,
-            0x02 => {
+            ak::WIA => ak::DEVICE_ID,
+            ak::INFO => AK_INFO,
+            ak::ST1 => {
                 self.update();
                 self.st1
             }
-            0x03..=0x08 => self.data[usize::from(r - 0x03)],
-            0x09 => {
+            ak::HXL..=ak::HZH => self.data[usize::from(r - ak::HXL)],
+            ak::ST2 => {
                 // reading ST2 ends the data read
                 self.st1 = 0;
                 self.st2
             }
-            0x0A => self.cntl1,
-            0x10..=0x12 if self.cntl1 & 0x0F == 0x0F => self.asa[usize::from(r - 0x10)],
+            ak::CNTL1 => self.cntl1,
+            ak::ASAX..=ak::ASAZ if self.cntl1 & ak::MODE_MASK == ak::MODE_FUSE_ROM => {
+                self.asa[usize::from(r - ak::ASAX)]
+            }
             _ => 0,
         }
     }
 
     fn reg_write(&mut self, r: u8, v: u8) {
         match r {
-            0x0A => {
-                let (old, new) = (self.cntl1 & 0x0F, v & 0x0F);
-                if old != 0 && new != 0 && old != new {
+            ak::CNTL1 => {
+                let (old, new) = (self.cntl1 & ak::MODE_MASK, v & ak::MODE_MASK);
+                if old != ak::MODE_POWER_DOWN && new != ak::MODE_POWER_DOWN && old != new {
                     self.mode_violations += 1;
                     return;
                 }
-                self.cntl1 = v & 0x1F;
-                if new == 0x01 {
+                self.cntl1 = v & (ak::BIT_16 | ak::MODE_MASK);
+                if new == ak::MODE_SINGLE {
                     self.measure();
-                    self.cntl1 &= 0x10; // single measurement, then power-down
+                    self.cntl1 &= ak::BIT_16; // single measurement, then power-down
                 } else if let Some(p) = self.period_ns() {
                     self.next_sample_ns = self.clock.now_ns() + p;
                 }
             }
-            0x0B if v & 0x01 != 0 => {
+            ak::CNTL2 if v & ak::SRST != 0 => {
                 self.cntl1 = 0;
                 self.st1 = 0;
                 self.st2 = 0;
@@ -216,7 +218,7 @@ impl FakeMpu9250 {
             regs: [0; 128],
             ptr: 0,
             present: true,
-            who_am_i: MPU9250_ID,
+            who_am_i: mpu::MPU9250_ID,
             resets: 0,
             ak: FakeAk8963::new(clock),
         };
@@ -230,13 +232,13 @@ impl FakeMpu9250 {
 
     fn reset(&mut self) {
         self.regs = [0; 128];
-        self.regs[PWR_MGMT_1] = 0x01;
+        self.regs[PWR_MGMT_1] = mpu::CLKSEL_AUTO;
         self.regs[WHO_AM_I] = self.who_am_i;
     }
 
     /// True when the AK8963 is on the host bus.
     pub fn bypass(&self) -> bool {
-        self.regs[INT_PIN_CFG] & BYPASS_EN != 0 && self.regs[USER_CTRL] & I2C_MST_EN == 0
+        self.regs[INT_PIN_CFG] & mpu::BYPASS_EN != 0 && self.regs[USER_CTRL] & mpu::I2C_MST_EN == 0
     }
     /// Device resets so far.
     pub fn resets(&self) -> u32 {
@@ -271,7 +273,7 @@ impl FakeMpu9250 {
             return;
         }
         *slot = v;
-        if usize::from(r) == PWR_MGMT_1 && v & 0x80 != 0 {
+        if usize::from(r) == PWR_MGMT_1 && v & mpu::H_RESET != 0 {
             self.resets += 1;
             self.reset();
         }

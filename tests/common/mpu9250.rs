@@ -1,6 +1,7 @@
 //! The MPU9250 and its AK8963 magnetometer as the compass driver talks to
-//! them: register names from the datasheets (MPU-9250 register map rev 1.6,
-//! AK8963 datasheet section 8), the exact bring-up and read scripts, and a
+//! them: the driver's register map (`driver::compass::{mpu, ak}`, from the
+//! MPU-9250 register map rev 1.6 and the AK8963 datasheet section 8), the
+//! exact bring-up and read scripts (bit values written out), and a
 //! compass over mocks (`new_compass`) with its `done` check.
 
 use embedded_hal_mock::eh1::delay::{CheckedDelay, Transaction as DelayT};
@@ -9,36 +10,19 @@ use paperbot::config;
 use paperbot::driver::compass::Compass;
 use paperbot::driver::{HeadingSensor, MagCalibrate};
 
-/// The MPU9250's address (AD0 low).
-pub const MPU: u8 = 0x68;
-/// The AK8963's address on the bypassed bus.
-pub const AK: u8 = 0x0C;
-
-/// MPU9250 registers.
-pub const WHO_AM_I: u8 = 0x75;
-pub const PWR_MGMT_1: u8 = 0x6B;
-pub const PWR_MGMT_2: u8 = 0x6C;
-pub const USER_CTRL: u8 = 0x6A;
-pub const INT_PIN_CFG: u8 = 0x37;
-/// What WHO_AM_I reads on an MPU9250.
-pub const MPU9250_ID: u8 = 0x71;
-
-/// AK8963 registers.
-pub const WIA: u8 = 0x00;
-pub const ST1: u8 = 0x02;
-pub const HXL: u8 = 0x03;
-pub const CNTL1: u8 = 0x0A;
-pub const ASAX: u8 = 0x10;
-/// What WIA reads on an AK8963.
-pub const AK8963_ID: u8 = 0x48;
-/// CNTL1: power down; fuse ROM access; continuous mode 2 (100 Hz), 16 bit.
-pub const POWER_DOWN: u8 = 0x00;
-pub const FUSE_ROM: u8 = 0x0F;
-pub const CONTINUOUS_100HZ_16BIT: u8 = 0x16;
-/// ST1's data-ready bit; ST2's overflow bit and 16-bit output bit.
-pub const DRDY: u8 = 0x01;
-pub const HOFL: u8 = 0x08;
-pub const BITM: u8 = 0x10;
+/// The chips' addresses (AD0 low; the AK8963 on the bypassed bus).
+pub use paperbot::config::i2c::{AK8963_ADDR as AK, MPU9250_ADDR as MPU};
+/// The AK8963's registers and bits: the driver's map (`tests/compass.rs`
+/// checks it against the datasheet), under the names the scripts use.
+pub use paperbot::driver::compass::ak::{
+    ASAX, BITM, CNTL1, DEVICE_ID as AK8963_ID, DRDY, HOFL, HXL, MODE_FUSE_ROM as FUSE_ROM,
+    MODE_POWER_DOWN as POWER_DOWN, ST1, WIA,
+};
+/// The MPU9250's registers: the driver's map.
+pub use paperbot::driver::compass::mpu::{INT_PIN_CFG, MPU9250_ID, PWR_MGMT_1, PWR_MGMT_2, USER_CTRL, WHO_AM_I};
+/// CNTL1: continuous mode 2 (100 Hz), 16 bit.
+pub const CONTINUOUS_100HZ_16BIT: u8 =
+    paperbot::driver::compass::ak::MODE_CONT2_100HZ | paperbot::driver::compass::ak::BIT_16;
 
 /// ASA below 128 on x: the mpu9250 crate's `asa - 128` on a u8 would panic.
 pub const ASA: [u8; 3] = [0x40, 0xB0, 0xFF];
