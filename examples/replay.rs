@@ -100,7 +100,7 @@ fn run(a: Args) -> Result<(), String> {
     let track =
         Track { label: "firmware estimate from the recorded readings", color: "#d62728", dashed: false, poses: &poses };
     let rays = lidar_rays(&samples, &estimates);
-    let svg = render_with_rays(&paperbot::sim::arena::Arena::new(lx, wy), &[track], &rays, &title);
+    let svg = render_with_rays(&arena, &[track], &rays, &title);
     std::fs::write(&a.out, svg).map_err(|e| format!("{}: {e}", a.out))?;
     let sensor = |name: &str, s: &paperbot::model::estimator::SensorStats| {
         format!("{name} {} accepted, {} outliers, {} unusable", s.accepted, s.outliers, s.unusable)

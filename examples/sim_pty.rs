@@ -40,7 +40,7 @@ fn parse_args() -> Result<Args, String> {
             "--seed" => a.cfg.seed = value("--seed")?.parse().map_err(|_| "--seed wants an integer")?,
             "--no-noise" => a.cfg.noise = Noise::OFF,
             "--start" => {
-                let (x, y, deg) = args::start(&value("--start")?, a.cfg.arena.length_x, a.cfg.arena.width_y)?;
+                let (x, y, deg) = args::start(&value("--start")?, a.cfg.arena.length_x_mm(), a.cfg.arena.width_y_mm())?;
                 a.cfg.start = PoseF64::new(x, y, deg.to_radians());
             }
             "--duration" => a.duration_s = Some(args::number("--duration", &value("--duration")?)?),

@@ -75,7 +75,7 @@ fn parse_args() -> Result<Option<Args>, String> {
             "--duration" => a.duration_s = num(&value("--duration")?, "--duration")?,
             "--arena" => {
                 let (l, w) = args::arena(&value("--arena")?)?;
-                a.cfg.arena = Arena::new(l, w);
+                a.cfg.arena = Arena::from_mm_f64(l, w);
             }
             "--start" => start = Some(value("--start")?),
             "--known-start" => a.cfg.locate_at_power_up = false,
@@ -119,12 +119,15 @@ fn parse_args() -> Result<Option<Args>, String> {
         return Err("--duration wants 0..86400 s".into());
     }
     if let Some(s) = start {
-        let (x, y, deg) = args::start(&s, a.cfg.arena.length_x, a.cfg.arena.width_y)?;
+        let (x, y, deg) = args::start(&s, a.cfg.arena.length_x_mm(), a.cfg.arena.width_y_mm())?;
         a.cfg.start = PoseF64::new(x, y, deg.to_radians());
     } else if !a.cfg.arena.contains(a.cfg.start.x, a.cfg.start.y) {
         return Err(format!(
             "the default start ({}, {}) mm is outside a {} x {} mm arena: give --start",
-            a.cfg.start.x, a.cfg.start.y, a.cfg.arena.length_x, a.cfg.arena.width_y
+            a.cfg.start.x,
+            a.cfg.start.y,
+            a.cfg.arena.length_x_mm(),
+            a.cfg.arena.width_y_mm()
         ));
     }
     Ok(Some(a))

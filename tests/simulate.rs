@@ -19,7 +19,7 @@ use std::f64::consts::{FRAC_PI_2, PI};
 
 #[test]
 fn ray_cast_hits_the_expected_wall() {
-    let a = Arena::new(762.5, 495.0);
+    let a = Arena::from_mm_f64(762.5, 495.0);
     let d = |deg: f64| deg.to_radians();
     // (x, y, heading deg) -> distance
     let table = [
@@ -398,7 +398,7 @@ fn the_lidar_cone_reads_the_nearest_wall_in_it() {
     let mut worst: f64 = 0.0;
     let mut shorter = 0;
     for _ in 0..2_000 {
-        let (x, y) = (rng.range_f64(1.0, a.length_x - 1.0), rng.range_f64(1.0, a.width_y - 1.0));
+        let (x, y) = (rng.range_f64(1.0, a.length_x_mm() - 1.0), rng.range_f64(1.0, a.width_y_mm() - 1.0));
         let dir = rng.range_f64(0.0, 2.0 * PI);
         let (t, _) = lidar_range(&a, x, y, dir, &lab).unwrap();
         let brute = (0..=2000)

@@ -1,36 +1,35 @@
-//! The arena: an axis-aligned box with its origin at a corner, x along the
-//! long side (north), y along the short side (east), in mm, and ray casting
-//! to its walls in f64 (host only).
+//! The arena on the host: the one [`Arena`] type (`model::measurement`,
+//! the box the firmware's estimator knows), seen in f64 mm, with ray
+//! casting to its walls (host only). Its origin is at a corner, x along the
+//! long side (north), y along the short side (east).
 
-use crate::config;
-
-/// A box `[0, length_x] x [0, width_y]`, mm.
-#[derive(Clone, Copy, PartialEq, Debug)]
-pub struct Arena {
-    pub length_x: f64,
-    pub width_y: f64,
-}
-
-impl Default for Arena {
-    /// The team's box (config::arena).
-    fn default() -> Arena {
-        Arena { length_x: config::arena::LENGTH_X.to_mm_f64(), width_y: config::arena::WIDTH_Y.to_mm_f64() }
-    }
-}
+use crate::math::Length;
+pub use crate::model::measurement::Arena;
 
 impl Arena {
-    pub fn new(length_x: f64, width_y: f64) -> Arena {
-        Arena { length_x, width_y }
+    /// A box `[0, length_x] x [0, width_y]`, mm (to the model's 2^-16 mm).
+    pub fn from_mm_f64(length_x: f64, width_y: f64) -> Arena {
+        Arena { length_x: Length::from_mm_f64(length_x), width_y: Length::from_mm_f64(width_y) }
+    }
+
+    /// Extent along x (north), mm.
+    pub fn length_x_mm(&self) -> f64 {
+        self.length_x.to_mm_f64()
+    }
+
+    /// Extent along y (east), mm.
+    pub fn width_y_mm(&self) -> f64 {
+        self.width_y.to_mm_f64()
     }
 
     /// True when (x, y) is inside the box (walls included).
     pub fn contains(&self, x: f64, y: f64) -> bool {
-        (0.0..=self.length_x).contains(&x) && (0.0..=self.width_y).contains(&y)
+        (0.0..=self.length_x_mm()).contains(&x) && (0.0..=self.width_y_mm()).contains(&y)
     }
 
     /// Distance from (x, y) to the nearest wall, mm (negative outside).
     pub fn clearance(&self, x: f64, y: f64) -> f64 {
-        x.min(self.length_x - x).min(y).min(self.width_y - y)
+        x.min(self.length_x_mm() - x).min(y).min(self.width_y_mm() - y)
     }
 
     /// Distance along the ray from (x, y) in direction `heading` (radians,
@@ -39,6 +38,7 @@ impl Arena {
     /// misses the box). A ray from inside always hits.
     pub fn ray_cast(&self, x: f64, y: f64, heading: f64) -> Option<f64> {
         let (dy, dx) = heading.sin_cos();
+        let (length_x, width_y) = (self.length_x_mm(), self.width_y_mm());
         // from inside (walls included) only the walls ahead count, so a ray
         // leaving a wall or a corner is not stopped by it at distance 0
         let inside = self.contains(x, y);
@@ -51,15 +51,15 @@ impl Arena {
             }
         };
         if dx != 0.0 {
-            for wall in [0.0, self.length_x].into_iter().filter(|&w| ahead(w, x, dx)) {
+            for wall in [0.0, length_x].into_iter().filter(|&w| ahead(w, x, dx)) {
                 let t = (wall - x) / dx;
-                consider(t, y + t * dy, 0.0, self.width_y);
+                consider(t, y + t * dy, 0.0, width_y);
             }
         }
         if dy != 0.0 {
-            for wall in [0.0, self.width_y].into_iter().filter(|&w| ahead(w, y, dy)) {
+            for wall in [0.0, width_y].into_iter().filter(|&w| ahead(w, y, dy)) {
                 let t = (wall - y) / dy;
-                consider(t, x + t * dx, 0.0, self.length_x);
+                consider(t, x + t * dx, 0.0, length_x);
             }
         }
         best

@@ -126,9 +126,9 @@ pub fn lidar_range(arena: &Arena, x: f64, y: f64, dir: f64, r: &Realism) -> Opti
     }
     // each wall: its outward normal's direction and the distance to it
     let walls = [
-        (0.0, arena.length_x - x),
+        (0.0, arena.length_x_mm() - x),
         (core::f64::consts::PI, x),
-        (core::f64::consts::FRAC_PI_2, arena.width_y - y),
+        (core::f64::consts::FRAC_PI_2, arena.width_y_mm() - y),
         (-core::f64::consts::FRAC_PI_2, y),
     ];
     let mut best: Option<(f64, f64)> = None;
@@ -146,7 +146,7 @@ pub fn lidar_range(arena: &Arena, x: f64, y: f64, dir: f64, r: &Realism) -> Opti
         // the point must be on this wall, not beyond a corner (where the
         // other wall is nearer anyway)
         let (px, py) = (x + t * ray.cos(), y + t * ray.sin());
-        if px < -1e-6 || py < -1e-6 || px > arena.length_x + 1e-6 || py > arena.width_y + 1e-6 {
+        if px < -1e-6 || py < -1e-6 || px > arena.length_x_mm() + 1e-6 || py > arena.width_y_mm() + 1e-6 {
             continue;
         }
         if best.is_none_or(|(b, _)| t < b) {
@@ -160,7 +160,7 @@ pub fn lidar_range(arena: &Arena, x: f64, y: f64, dir: f64, r: &Realism) -> Opti
 fn incidence_of_ray(arena: &Arena, x: f64, dir: f64, t: f64) -> f64 {
     let (s, c) = dir.sin_cos();
     let px = x + t * c;
-    let on_x_wall = px.abs() < 1e-6 || (px - arena.length_x).abs() < 1e-6;
+    let on_x_wall = px.abs() < 1e-6 || (px - arena.length_x_mm()).abs() < 1e-6;
     if on_x_wall {
         c.abs().acos()
     } else {

@@ -186,10 +186,7 @@ impl SimRobot {
         let _ = crate::driver::lidar::bring_up(&mut front, &mut right);
         let _ = compass.reinit();
         // the firmware knows the arena it is in (its estimator uses the walls)
-        let arena = crate::model::measurement::Arena {
-            length_x: Length::from_mm_f64(cfg.arena.length_x),
-            width_y: Length::from_mm_f64(cfg.arena.width_y),
-        };
+        let arena = cfg.arena;
         let believed = if cfg.locate_at_power_up { arena.centre() } else { cfg.start.to_pose() };
         let mut ctl =
             Controller::with_log(front, right, compass, SimServos::default(), believed, arena, RingLog::new());

@@ -39,10 +39,10 @@ pub fn render(arena: &Arena, tracks: &[Track<'_>], title: &str) -> String {
 pub fn render_with_rays(arena: &Arena, tracks: &[Track<'_>], rays: &[Ray<'_>], title: &str) -> String {
     let rows = tracks.len() + 1 + usize::from(!rays.is_empty());
     let legend_h = LEGEND_ROW * rows as f64;
-    let w = arena.width_y + 2.0 * MARGIN;
-    let h = arena.length_x + 2.0 * MARGIN + legend_h;
+    let w = arena.width_y_mm() + 2.0 * MARGIN;
+    let h = arena.length_x_mm() + 2.0 * MARGIN + legend_h;
     // (x north, y east) -> (svg x right, svg y down)
-    let px = |p: &PoseF64| (MARGIN + p.y, MARGIN + arena.length_x - p.x);
+    let px = |p: &PoseF64| (MARGIN + p.y, MARGIN + arena.length_x_mm() - p.x);
     let mut s = String::new();
     let _ = writeln!(
         s,
@@ -52,15 +52,16 @@ pub fn render_with_rays(arena: &Arena, tracks: &[Track<'_>], rays: &[Ray<'_>], t
     let _ = writeln!(
         s,
         r##"<rect x="{MARGIN}" y="{MARGIN}" width="{:.1}" height="{:.1}" fill="#f4f1e8" stroke="black" stroke-width="2"/>"##,
-        arena.width_y, arena.length_x
+        arena.width_y_mm(),
+        arena.length_x_mm()
     );
     let _ = writeln!(s, r#"<text x="{MARGIN}" y="{:.1}">{}</text>"#, MARGIN - 22.0, escape(title));
     let _ = writeln!(
         s,
         r#"<text x="{MARGIN}" y="{:.1}">N ^  arena {:.1} x {:.1} mm (x north, y east), 1 px = 1 mm</text>"#,
         MARGIN - 6.0,
-        arena.length_x,
-        arena.width_y
+        arena.length_x_mm(),
+        arena.width_y_mm()
     );
     for r in rays {
         let (x1, y1) = px(&PoseF64::new(r.from.0, r.from.1, 0.0));
@@ -99,7 +100,7 @@ pub fn render_with_rays(arena: &Arena, tracks: &[Track<'_>], rays: &[Ray<'_>], t
             );
         }
     }
-    let mut ly = MARGIN + arena.length_x + MARGIN * 0.5 + LEGEND_ROW;
+    let mut ly = MARGIN + arena.length_x_mm() + MARGIN * 0.5 + LEGEND_ROW;
     for t in tracks {
         let dash = if t.dashed { r#" stroke-dasharray="6 4""# } else { "" };
         let _ = writeln!(

@@ -10,8 +10,8 @@ pub fn random_pose_in_box(rng: &mut Rng) -> paperbot::sim::body::PoseF64 {
     let a = Arena::default();
     loop {
         let p = PoseF64::new(
-            rng.range_f64(0.0, a.length_x),
-            rng.range_f64(0.0, a.width_y),
+            rng.range_f64(0.0, a.length_x_mm()),
+            rng.range_f64(0.0, a.width_y_mm()),
             rng.range_f64(0.0, std::f64::consts::TAU),
         );
         if body_fits(&a, &Realism::LAB, &p) {

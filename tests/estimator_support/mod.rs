@@ -105,7 +105,7 @@ pub fn true_range(p: TruePose, mount: &LidarMount, lx: f64, wy: f64) -> f64 {
         cone_deg: paperbot::config::lidar::CONE_DEG,
         ..paperbot::sim::realism::Realism::IDEAL
     };
-    let arena = paperbot::sim::arena::Arena::new(lx, wy);
+    let arena = paperbot::sim::arena::Arena::from_mm_f64(lx, wy);
     let t = paperbot::sim::realism::lidar_range(&arena, mx, my, p.th + dir, &cone).map_or(f64::INFINITY, |(t, _)| t);
     t + f * dir.cos() + r * dir.sin()
 }

@@ -164,7 +164,7 @@ impl Watcher {
         let p = ctl.pose();
         let (x, y) = (p.x.to_mm_f64(), p.y.to_mm_f64());
         let a = robot.cfg.arena;
-        let outside = (-x).max(x - a.length_x).max(-y).max(y - a.width_y).max(0.0);
+        let outside = (-x).max(x - a.length_x_mm()).max(-y).max(y - a.width_y_mm()).max(0.0);
         self.seen.worst_outside_mm = self.seen.worst_outside_mm.max(outside);
         for d in ctl.estimator().covariance_diagonal() {
             assert!(d > 0 && d <= 1 << 30, "covariance {:?}", ctl.estimator().covariance());
