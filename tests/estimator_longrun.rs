@@ -62,7 +62,7 @@ fn two_hours_of_driving_keep_the_covariance_valid_and_the_estimate_on_track() {
 #[test]
 fn an_hour_standing_still_does_not_collapse_the_covariance() {
     let (lx, wy) = (762.5, 495.0);
-    let truth = TruePose { x: 300.0, y: 200.0, th: 30f64.to_radians() };
+    let truth = PoseF64 { x: 300.0, y: 200.0, theta: 30f64.to_radians() };
     let mut est = Estimator::new(truth.to_pose());
     let mut rng = Rng::new(9);
     let dt = paperbot::math::Dt::from_micros(10_000).unwrap();
@@ -90,14 +90,14 @@ fn an_hour_standing_still_does_not_collapse_the_covariance() {
                 }
             }
         }
-        let h = truth.th.to_degrees() + 2.5 * rng.normal();
+        let h = truth.theta.to_degrees() + 2.5 * rng.normal();
         est.update_heading(paperbot::math::Angle::from_degrees_f64(h));
         check(&est, &mut worst);
         min_var = min_var.min(est.covariance_diagonal().into_iter().min().unwrap());
     }
     let p = est.pose();
     let (ex, ey) = (p.x.to_mm_f64() - truth.x, p.y.to_mm_f64() - truth.y);
-    let eth = wrap(p.theta.to_radians_f64() - truth.th).to_degrees();
+    let eth = wrap(p.theta.to_radians_f64() - truth.theta).to_degrees();
     println!("1 h still: error {ex:.2}, {ey:.2} mm, {eth:.3} deg; sigma {:?}; smallest variance {min_var} (Q14 mm^2); smallest pivot {worst:.0}; {:?}", est.sigma(), est.stats());
     assert!(ex.abs() < 2.0 && ey.abs() < 2.0 && eth.abs() < 0.5);
     // the floors keep every variance well above the Q14 resolution

@@ -7,7 +7,7 @@
 
 mod estimator_support;
 
-use estimator_support::{true_range, wrap, Rng, TruePose};
+use estimator_support::{true_range, wrap, PoseF64, Rng};
 use paperbot::config::arena;
 use paperbot::config::estimator::{ARENA_MARGIN, GATE_SIGMAS, MAX_VARIANCE_MM2, REACQUIRE_SIGMA_MM};
 use paperbot::math::{Angle, Dt, Length, Speed, TurnRate};
@@ -178,7 +178,7 @@ fn every_correction_stays_within_the_gate_of_its_covariance() {
 /// it walks back in bounded steps. Returns the time until it is within
 /// 20 mm and 5 degrees for good (s), re-acquisitions, the largest step in
 /// sigmas and mm.
-fn recover(truth: TruePose, start: Pose, settled: bool, seed: u64) -> (Option<f64>, EstimatorStats, f64, f64) {
+fn recover(truth: PoseF64, start: Pose, settled: bool, seed: u64) -> (Option<f64>, EstimatorStats, f64, f64) {
     let mut rng = Rng::new(seed);
     let (lx, wy) = estimator_support::arena_mm();
     let (lx, wy) = (lx.to_mm_f64(), wy.to_mm_f64());
@@ -188,7 +188,7 @@ fn recover(truth: TruePose, start: Pose, settled: bool, seed: u64) -> (Option<f6
     let (mut back_at, mut worst, mut longest) = (None, 0.0f64, 0.0f64);
     for tick in 0..500 {
         est.predict(Motion::Stop, TICK);
-        let compass = Angle::from_radians_f64(truth.th + rng.gauss(2.5f64.to_radians()));
+        let compass = Angle::from_radians_f64(truth.theta + rng.gauss(2.5f64.to_radians()));
         let mut steps = vec![checked(&mut est, |e| e.update_heading(compass), false)];
         if tick % 3 == 0 {
             for id in [LidarId::Front, LidarId::Right] {
@@ -202,7 +202,7 @@ fn recover(truth: TruePose, start: Pose, settled: bool, seed: u64) -> (Option<f6
         }
         let p = est.pose();
         let e_mm = (p.x.to_mm_f64() - truth.x).hypot(p.y.to_mm_f64() - truth.y);
-        let e_deg = wrap(p.theta.to_radians_f64() - truth.th).to_degrees();
+        let e_deg = wrap(p.theta.to_radians_f64() - truth.theta).to_degrees();
         if e_mm < 20.0 && e_deg.abs() < 5.0 {
             back_at.get_or_insert(f64::from(tick + 1) * 0.01);
         } else {
@@ -226,7 +226,7 @@ fn a_lost_estimate_walks_back_in_bounded_steps() {
         ((620.0, 150.0, 5.0), (70, 150, 5.0)),
     ];
     for ((tx, ty, th), (sx, sy, sh)) in cases {
-        let truth = TruePose { x: tx, y: ty, th: f64::to_radians(th) };
+        let truth = PoseF64 { x: tx, y: ty, theta: f64::to_radians(th) };
         for settled in [false, true] {
             for seed in 1..=2 {
                 let (back, st, worst, longest) = recover(truth, Pose::from_mm(sx, sy, deg(sh)), settled, seed);

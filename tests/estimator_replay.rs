@@ -23,7 +23,7 @@ fn truth_csv(res: &RunResult) -> String {
     let mut s = String::from("t_ms,x_mm,y_mm,theta_deg\n");
     for (row, (_, t)) in res.log.iter().zip(&res.truth) {
         // the truth at the end of the tick, i.e. at the next row's time
-        s += &format!("{},{:.3},{:.3},{:.4}\n", row.t_ms + 10, t.x, t.y, t.th.to_degrees().rem_euclid(360.0));
+        s += &format!("{},{:.3},{:.3},{:.4}\n", row.t_ms + 10, t.x, t.y, t.theta.to_degrees().rem_euclid(360.0));
     }
     s
 }
@@ -111,7 +111,7 @@ fn stopped_robot_stays_put_and_readings_pull_it_to_the_truth() {
     // 2 s standing still at (200, 150) facing north, perfect readings; the
     // start guess is 30 mm and 5 degrees off.
     let (lx, wy) = (762.5, 495.0);
-    let truth = TruePose { x: 200.0, y: 150.0, th: 0.0 };
+    let truth = PoseF64 { x: 200.0, y: 150.0, theta: 0.0 };
     let f = true_range(truth, &paperbot::config::geometry::FRONT_LIDAR, lx, wy);
     let r = true_range(truth, &paperbot::config::geometry::RIGHT_LIDAR, lx, wy);
     let fr = raw_reading(&paperbot::config::lidar::FRONT, f).round();
@@ -121,7 +121,7 @@ fn stopped_robot_stays_put_and_readings_pull_it_to_the_truth() {
     for k in 0..200 {
         log += &format!("{},90,90,{fr},{rr},0\n", k * 10);
     }
-    let start = TruePose { x: 220.0, y: 130.0, th: 5f64.to_radians() }.to_pose();
+    let start = PoseF64 { x: 220.0, y: 130.0, theta: 5f64.to_radians() }.to_pose();
     let (est, _) = replay::replay(&replay::parse(&log).unwrap(), replay::Start::Pose(start), Arena::DEFAULT);
     let last = est.last().unwrap().pose;
     // the readings are rounded to whole mm: the model maps them within ~1 mm

@@ -3,7 +3,7 @@
 
 mod estimator_support;
 
-use estimator_support::{true_range, Rng, TruePose};
+use estimator_support::{true_range, PoseF64, Rng};
 use paperbot::config::geometry::{FRONT_LIDAR, RIGHT_LIDAR};
 use paperbot::math::Length;
 use paperbot::model::measurement::{expected_heading, expected_lidar, Arena, Beam, LidarId, Wall};
@@ -17,7 +17,8 @@ fn expected_distances_match_f64_ray_casting() {
     let mut rng = Rng::new(3);
     let mut worst: f64 = 0.0;
     for _ in 0..20_000 {
-        let t = TruePose { x: 60.0 + 640.0 * rng.uniform(), y: 60.0 + 375.0 * rng.uniform(), th: 7.0 * rng.uniform() };
+        let t =
+            PoseF64 { x: 60.0 + 640.0 * rng.uniform(), y: 60.0 + 375.0 * rng.uniform(), theta: 7.0 * rng.uniform() };
         for (which, mount) in [(LidarId::Front, &FRONT_LIDAR), (LidarId::Right, &RIGHT_LIDAR)] {
             let want = true_range(t, mount, LX, WY);
             let beam = Beam::new(&arena, &t.to_pose(), mount);
@@ -48,7 +49,7 @@ fn walls_and_distances_for_the_four_headings() {
         (270.0, Wall::West, 150.0, Wall::North, 562.5),
     ];
     for (deg, fw, fd, rw, rd) in cases {
-        let pose = TruePose { x: 200.0, y: 150.0, th: f64::to_radians(deg) }.to_pose();
+        let pose = PoseF64 { x: 200.0, y: 150.0, theta: f64::to_radians(deg) }.to_pose();
         let f = Beam::new(&arena, &pose, &FRONT_LIDAR);
         let r = Beam::new(&arena, &pose, &RIGHT_LIDAR);
         assert_eq!((f.wall, r.wall), (fw, rw), "heading {deg}");
@@ -62,7 +63,7 @@ fn walls_and_distances_for_the_four_headings() {
 fn the_mount_setback_is_what_the_lidar_model_subtracts() {
     // facing north 100 mm from the north wall: the front lidar (50 mm behind
     // the reference point) sees the wall 150 mm away; the model output is 100.
-    let pose = TruePose { x: LX - 100.0, y: 200.0, th: 0.0 };
+    let pose = PoseF64 { x: LX - 100.0, y: 200.0, theta: 0.0 };
     let from_mount = true_range(pose, &FRONT_LIDAR, LX, WY) - FRONT_LIDAR.forward.to_mm_f64();
     assert!((from_mount - 150.0).abs() < 1e-9);
     let got = expected_lidar(&Arena::DEFAULT, &pose.to_pose(), LidarId::Front).unwrap();
@@ -73,7 +74,7 @@ fn the_mount_setback_is_what_the_lidar_model_subtracts() {
 fn normal_miss_is_positive_for_long_readings_and_scaled_by_the_incidence() {
     let arena = Arena::DEFAULT;
     // 30 degrees off square to the north wall, 300 mm from it
-    let pose = TruePose { x: LX - 300.0, y: 250.0, th: f64::to_radians(30.0) }.to_pose();
+    let pose = PoseF64 { x: LX - 300.0, y: 250.0, theta: f64::to_radians(30.0) }.to_pose();
     let beam = Beam::new(&arena, &pose, &FRONT_LIDAR);
     assert_eq!(beam.wall, Wall::North);
     let expected = beam.expected_distance().unwrap();
@@ -91,23 +92,23 @@ fn normal_miss_is_positive_for_long_readings_and_scaled_by_the_incidence() {
 fn corner_test_and_incidence_limit() {
     let arena = Arena::DEFAULT;
     // aimed straight at the north-east corner from (LX - 200, WY - 200): 45 degrees
-    let at_corner = TruePose { x: LX - 200.0, y: WY - 200.0, th: f64::to_radians(45.0) }.to_pose();
+    let at_corner = PoseF64 { x: LX - 200.0, y: WY - 200.0, theta: f64::to_radians(45.0) }.to_pose();
     let b = Beam::new(&arena, &at_corner, &FRONT_LIDAR);
     assert!(b.near_corner(Length::from_mm(25)));
     // 10 degrees off the corner: the nearest points in the cone on the two
     // walls are about 50 mm apart
-    let off = TruePose { x: LX - 200.0, y: WY - 200.0, th: f64::to_radians(35.0) }.to_pose();
+    let off = PoseF64 { x: LX - 200.0, y: WY - 200.0, theta: f64::to_radians(35.0) }.to_pose();
     let b = Beam::new(&arena, &off, &FRONT_LIDAR);
     assert!(!b.near_corner(Length::from_mm(25)) && b.near_corner(Length::from_mm(60)));
     assert_eq!(b.wall, Wall::North);
     // square on: never near a corner, fully square
-    let square = TruePose { x: 300.0, y: 200.0, th: 0.0 }.to_pose();
+    let square = PoseF64 { x: 300.0, y: 200.0, theta: 0.0 }.to_pose();
     let b = Beam::new(&arena, &square, &FRONT_LIDAR);
     assert!(!b.near_corner(Length::from_mm(25)) && b.square_enough(1 << 30));
     // 61 degrees from square fails a 60-degree limit, 59 passes
     let cos60 = 1 << 29;
     for (deg, ok) in [(59.0, true), (61.0, false)] {
-        let p = TruePose { x: LX - 100.0, y: 100.0, th: f64::to_radians(deg) }.to_pose();
+        let p = PoseF64 { x: LX - 100.0, y: 100.0, theta: f64::to_radians(deg) }.to_pose();
         let b = Beam::new(&arena, &p, &FRONT_LIDAR);
         assert_eq!(b.wall, Wall::North, "{deg}");
         assert_eq!(b.square_enough(cos60), ok, "{deg}");

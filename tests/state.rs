@@ -1,7 +1,7 @@
 //! The fixed-point state update against the f64 reference of the report's
 //! equations.
 mod common;
-use common::reference::{self, heading_error, PoseF};
+use common::reference::{self, heading_error, PoseF64};
 use common::rng::Rng;
 use paperbot::config::geometry::ROTATION_TO_REFERENCE;
 use paperbot::math::{Angle, Coord, Dt, Speed, TurnRate};
@@ -11,8 +11,8 @@ fn ms(n: u32) -> Dt {
     Dt::from_micros(n * 1000).unwrap()
 }
 
-fn assert_close(p: &Pose, r: &PoseF, pos_mm: f64, theta_rad: f64, what: &str) {
-    let f = PoseF::of(p);
+fn assert_close(p: &Pose, r: &PoseF64, pos_mm: f64, theta_rad: f64, what: &str) {
+    let f = PoseF64::from_pose(p);
     let (ex, ey, et) = ((f.x - r.x).abs(), (f.y - r.y).abs(), heading_error(f.theta, r.theta).abs());
     assert!(ex < pos_mm && ey < pos_mm && et < theta_rad, "{what}: fixed {f:?} vs reference {r:?}");
 }
@@ -39,7 +39,7 @@ fn straight_cases_follow_the_heading() {
         for _ in 0..20 {
             p = step(&p, Motion::Straight(Speed::from_mps_f64(v)), ms(50));
         }
-        let f = PoseF::of(&p);
+        let f = PoseF64::from_pose(&p);
         assert!((f.x - dx).abs() < 1e-3 && (f.y - dy).abs() < 1e-3, "heading {deg}: {f:?}");
         assert_eq!(p.theta, Angle::from_degrees_f64(deg), "straight motion keeps the heading");
     }
@@ -56,14 +56,14 @@ fn turn_case_swings_the_reference_point_about_the_axle() {
     for _ in 0..20 {
         p = step(&p, Motion::Turn(w), ms(50));
     }
-    let f = PoseF::of(&p);
+    let f = PoseF64::from_pose(&p);
     assert!((f.theta.to_degrees() - 90.0).abs() < 1e-4, "{f:?}");
     assert!((f.x + d).abs() < 1e-3 && (f.y - d).abs() < 1e-3, "{f:?}");
     // and back counter-clockwise returns exactly where it started
     for _ in 0..20 {
         p = step(&p, Motion::Turn(w.neg()), ms(50));
     }
-    let f = PoseF::of(&p);
+    let f = PoseF64::from_pose(&p);
     assert!(f.x.abs() < 1e-5 && f.y.abs() < 1e-5 && heading_error(f.theta, 0.0).abs() < 1e-8, "{f:?}");
 }
 
@@ -72,7 +72,7 @@ fn heading_wraps_at_0_and_360() {
     // clockwise through 360: from 350 deg, +20 deg
     let w = TurnRate::from_rad_s_f64(20f64.to_radians());
     let mut p = Pose::from_mm(0, 0, Angle::from_degrees_f64(350.0));
-    let mut r = PoseF::of(&p);
+    let mut r = PoseF64::from_pose(&p);
     for _ in 0..100 {
         p = step(&p, Motion::Turn(w), ms(10));
         r = reference::step(r, Motion::Turn(w), ms(10));
@@ -90,7 +90,7 @@ fn heading_wraps_at_0_and_360() {
     let w = TurnRate::from_rad_s_f64(std::f64::consts::TAU);
     let start = Pose::from_mm(5, 7, Angle::from_degrees_f64(123.0));
     let mut p = start;
-    let mut r = PoseF::of(&p);
+    let mut r = PoseF64::from_pose(&p);
     for _ in 0..10_000 {
         p = step(&p, Motion::Turn(w), ms(10));
         r = reference::step(r, Motion::Turn(w), ms(10));
@@ -105,7 +105,7 @@ fn random_motions_track_the_f64_reference() {
     for seed in [1u64, 2, 3] {
         let mut rng = Rng::new(seed);
         let mut p = Pose::new(Coord::ZERO, Coord::ZERO, Angle(rng.next_u32()));
-        let mut r = PoseF::of(&p);
+        let mut r = PoseF64::from_pose(&p);
         let mut motion = Motion::Stop;
         let (mut worst_pos, mut worst_th): (f64, f64) = (0.0, 0.0);
         for i in 0..100_000 {
@@ -122,7 +122,7 @@ fn random_motions_track_the_f64_reference() {
             let dt = Dt::from_micros(rng.range_u32(5_000, 50_000)).unwrap();
             p = step(&p, motion, dt);
             r = reference::step(r, motion, dt);
-            let f = PoseF::of(&p);
+            let f = PoseF64::from_pose(&p);
             worst_pos = worst_pos.max((f.x - r.x).abs()).max((f.y - r.y).abs());
             worst_th = worst_th.max(heading_error(f.theta, r.theta).abs());
         }
@@ -139,7 +139,7 @@ fn an_hour_of_constant_motion_does_not_drift() {
     let v = Motion::Straight(Speed::from_mps_f64(0.137));
     let w = Motion::Turn(TurnRate::from_rad_s_f64(2.71));
     let mut p = Pose::from_mm(0, 0, Angle::from_degrees_f64(17.0));
-    let mut r = PoseF::of(&p);
+    let mut r = PoseF64::from_pose(&p);
     for i in 0..360_000 {
         let m = if (i / 500) % 2 == 0 { v } else { w };
         p = step(&p, m, dt);
@@ -157,12 +157,12 @@ fn heading_set_from_outside_is_honoured() {
     p = step(&p, v, ms(10)); // cache now holds 0 deg
     p.theta = Angle::from_degrees_f64(90.0);
     let q = step(&p, v, ms(10));
-    let f = PoseF::of(&q);
+    let f = PoseF64::from_pose(&q);
     assert!((f.x - 1.0).abs() < 1e-6 && (f.y - 1.0).abs() < 1e-6, "{f:?}: moved east by 1 mm after 1 mm north");
     // a turn after an outside change starts from the new heading too
     let mut t = Pose::from_mm(0, 0, Angle::ZERO);
     t = step(&t, Motion::Turn(TurnRate::from_rad_s_f64(1.0)), ms(10));
     t.theta = Angle::from_degrees_f64(180.0);
-    let r = reference::step(PoseF::of(&t), Motion::Turn(TurnRate::from_rad_s_f64(1.0)), ms(10));
+    let r = reference::step(PoseF64::from_pose(&t), Motion::Turn(TurnRate::from_rad_s_f64(1.0)), ms(10));
     assert_close(&step(&t, Motion::Turn(TurnRate::from_rad_s_f64(1.0)), ms(10)), &r, 1e-5, 1e-8, "turn after reset");
 }

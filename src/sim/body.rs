@@ -20,7 +20,8 @@ pub enum Kinematics {
     Report,
 }
 
-/// A pose in f64: mm, and radians clockwise from north.
+/// A pose in f64: mm, and radians clockwise from north. The one host pose
+/// type: the simulator's truth, the tests' f64 references and truths.
 #[derive(Clone, Copy, PartialEq, Debug, Default)]
 pub struct PoseF64 {
     pub x: f64,

@@ -7,32 +7,22 @@ use paperbot::math::Dt;
 use paperbot::model::{Motion, Pose};
 use std::f64::consts::TAU;
 
-#[derive(Clone, Copy, Debug)]
-pub struct PoseF {
-    pub x: f64,
-    pub y: f64,
-    /// Radians, clockwise from north, in [0, 2 pi).
-    pub theta: f64,
-}
+/// The reference works on the one host pose type (theta in [0, 2 pi)
+/// after a turn).
+pub use paperbot::sim::body::PoseF64;
 
-impl PoseF {
-    pub fn of(p: &Pose) -> PoseF {
-        PoseF { x: p.x.to_mm_f64(), y: p.y.to_mm_f64(), theta: p.theta.to_radians_f64() }
-    }
-}
-
-pub fn step(p: PoseF, motion: Motion, dt: Dt) -> PoseF {
+pub fn step(p: PoseF64, motion: Motion, dt: Dt) -> PoseF64 {
     let t = f64::from(dt.as_micros()) * 1e-6;
     let d = ROTATION_TO_REFERENCE.to_mm_f64();
     match motion {
         Motion::Stop => p,
         Motion::Straight(v) => {
             let s = v.to_mps_f64() * 1000.0 * t;
-            PoseF { x: p.x + s * p.theta.cos(), y: p.y + s * p.theta.sin(), theta: p.theta }
+            PoseF64 { x: p.x + s * p.theta.cos(), y: p.y + s * p.theta.sin(), theta: p.theta }
         }
         Motion::Turn(w) => {
             let th = p.theta + w.to_rad_s_f64() * t;
-            PoseF {
+            PoseF64 {
                 x: p.x - d * (p.theta.cos() - th.cos()),
                 y: p.y - d * (p.theta.sin() - th.sin()),
                 theta: th.rem_euclid(TAU),

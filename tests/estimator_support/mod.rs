@@ -5,7 +5,7 @@
 #![allow(dead_code)]
 
 use paperbot::config;
-use paperbot::math::{Angle, Coord, Dt, Length};
+use paperbot::math::{Angle, Dt, Length};
 use paperbot::model::estimator::{Estimator, Update};
 use paperbot::model::lidar::LidarMount;
 use paperbot::model::lidar::{LidarModel, Range};
@@ -59,19 +59,9 @@ pub fn motion_of(cmd: (u8, u8)) -> Motion {
     config::actuators::MODEL.motion_from_commands(ServoCmd::from_int(cmd.0), ServoCmd::from_int(cmd.1))
 }
 
-/// The true pose, f64: mm, radians clockwise from north.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct TruePose {
-    pub x: f64,
-    pub y: f64,
-    pub th: f64,
-}
-
-impl TruePose {
-    pub fn to_pose(self) -> Pose {
-        Pose::new(Coord::from_mm_f64(self.x), Coord::from_mm_f64(self.y), Angle::from_radians_f64(self.th))
-    }
-}
+/// The true pose: the one host pose type (f64 mm, radians clockwise from
+/// north).
+pub use paperbot::sim::body::PoseF64;
 
 pub fn d_mm() -> f64 {
     config::geometry::ROTATION_TO_REFERENCE.to_mm_f64()
@@ -79,14 +69,14 @@ pub fn d_mm() -> f64 {
 
 /// The report's equations in f64 (straight with an extra heading drift
 /// rate `drift` rad/s: the noise N_w while driving straight).
-pub fn truth_step(p: TruePose, motion_kind: i8, v: f64, w: f64, drift: f64, dt: f64) -> TruePose {
+pub fn truth_step(p: PoseF64, motion_kind: i8, v: f64, w: f64, drift: f64, dt: f64) -> PoseF64 {
     match motion_kind {
         0 => p,
-        1 => TruePose { x: p.x + v * dt * p.th.cos(), y: p.y + v * dt * p.th.sin(), th: p.th + drift * dt },
+        1 => PoseF64 { x: p.x + v * dt * p.theta.cos(), y: p.y + v * dt * p.theta.sin(), theta: p.theta + drift * dt },
         _ => {
-            let th1 = p.th + w * dt;
+            let th1 = p.theta + w * dt;
             let d = d_mm();
-            TruePose { x: p.x - d * (p.th.cos() - th1.cos()), y: p.y - d * (p.th.sin() - th1.sin()), th: th1 }
+            PoseF64 { x: p.x - d * (p.theta.cos() - th1.cos()), y: p.y - d * (p.theta.sin() - th1.sin()), theta: th1 }
         }
     }
 }
@@ -95,10 +85,10 @@ pub fn truth_step(p: TruePose, motion_kind: i8, v: f64, w: f64, drift: f64, dt: 
 /// model output (distance from the reference point along the beam): the
 /// nearest wall point in the sensor's cone (`config::lidar::CONE_DEG`, f64,
 /// `sim::realism`) less the mount's setback.
-pub fn true_range(p: TruePose, mount: &LidarMount, lx: f64, wy: f64) -> f64 {
+pub fn true_range(p: PoseF64, mount: &LidarMount, lx: f64, wy: f64) -> f64 {
     let (f, r) = (mount.forward.to_mm_f64(), mount.right.to_mm_f64());
     let dir = mount.direction.to_radians_f64();
-    let (s, c) = p.th.sin_cos();
+    let (s, c) = p.theta.sin_cos();
     let mx = p.x + f * c - r * s;
     let my = p.y + f * s + r * c;
     let cone = paperbot::sim::realism::Realism {
@@ -106,7 +96,7 @@ pub fn true_range(p: TruePose, mount: &LidarMount, lx: f64, wy: f64) -> f64 {
         ..paperbot::sim::realism::Realism::IDEAL
     };
     let arena = paperbot::sim::arena::Arena::from_mm_f64(lx, wy);
-    let t = paperbot::sim::realism::lidar_range(&arena, mx, my, p.th + dir, &cone).map_or(f64::INFINITY, |(t, _)| t);
+    let t = paperbot::sim::realism::lidar_range(&arena, mx, my, p.theta + dir, &cone).map_or(f64::INFINITY, |(t, _)| t);
     t + f * dir.cos() + r * dir.sin()
 }
 
@@ -168,7 +158,7 @@ pub struct RunResult {
     pub injected_compass_outliers: u32,
     /// Per tick: (t, truth, commands, front reading, right reading, compass deg) for logs.
     pub log: Vec<LogRow>,
-    pub truth: Vec<(f64, TruePose)>,
+    pub truth: Vec<(f64, PoseF64)>,
     /// Per tick: the estimate after the tick.
     pub poses: Vec<Pose>,
     /// The estimator's start pose.
@@ -205,16 +195,16 @@ fn waypoints(rng: &mut Rng) -> Vec<(f64, f64)> {
 
 /// Runs the scripted drive with the estimator (and dead reckoning beside
 /// it) at the loop rate. `observe` sees the estimator after every tick.
-pub fn run(sc: &Scenario, mut observe: impl FnMut(f64, &Estimator, TruePose)) -> RunResult {
+pub fn run(sc: &Scenario, mut observe: impl FnMut(f64, &Estimator, PoseF64)) -> RunResult {
     let mut rng = Rng::new(sc.seed);
     let spread = sc.spread.unwrap_or_else(lab_spread);
     let (lx, wy) = (config::arena::LENGTH_X.to_mm_f64(), config::arena::WIDTH_Y.to_mm_f64());
     let wps = waypoints(&mut rng);
-    let mut truth = TruePose { x: wps[0].0, y: wps[0].1, th: 0.3 * (rng.uniform() - 0.5) };
-    let start = TruePose {
+    let mut truth = PoseF64 { x: wps[0].0, y: wps[0].1, theta: 0.3 * (rng.uniform() - 0.5) };
+    let start = PoseF64 {
         x: truth.x + sc.start_error.0,
         y: truth.y + sc.start_error.1,
-        th: truth.th + sc.start_error.2.to_radians(),
+        theta: truth.theta + sc.start_error.2.to_radians(),
     };
     let mut est = Estimator::new(start.to_pose());
     let mut dr = start.to_pose();
@@ -240,7 +230,7 @@ pub fn run(sc: &Scenario, mut observe: impl FnMut(f64, &Estimator, TruePose)) ->
         let (tx, ty) = wps[wp % wps.len()];
         let (ex, ey) = (tx - truth.x, ty - truth.y);
         let dist = (ex * ex + ey * ey).sqrt();
-        let bearing_err = wrap(ey.atan2(ex) - truth.th);
+        let bearing_err = wrap(ey.atan2(ex) - truth.theta);
         let new_cmd = if t < pause_until {
             STOP_CMD
         } else if dist < 15.0 {
@@ -312,7 +302,7 @@ pub fn run(sc: &Scenario, mut observe: impl FnMut(f64, &Estimator, TruePose)) ->
                 let _: Update = est.update_lidar(which, d);
             }
         }
-        let mut heading = truth.th + sc.compass_sigma_deg.to_radians() * rng.normal();
+        let mut heading = truth.theta + sc.compass_sigma_deg.to_radians() * rng.normal();
         if rng.chance(sc.compass_outlier_p) {
             let sign = if rng.chance(0.5) { 1.0 } else { -1.0 };
             heading += sign * (30.0 + 60.0 * rng.uniform()).to_radians();
@@ -327,7 +317,7 @@ pub fn run(sc: &Scenario, mut observe: impl FnMut(f64, &Estimator, TruePose)) ->
         observe(t, &est, truth);
         let err = |p: &Pose| {
             let (x, y) = (p.x.to_mm_f64(), p.y.to_mm_f64());
-            let dth = wrap(p.theta.to_radians_f64() - truth.th).to_degrees();
+            let dth = wrap(p.theta.to_radians_f64() - truth.theta).to_degrees();
             (t, ((x - truth.x).powi(2) + (y - truth.y).powi(2)).sqrt(), dth)
         };
         res.est.push(err(&est.pose()));
