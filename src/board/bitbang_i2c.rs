@@ -447,6 +447,3 @@ impl<P: I2cPins, C: CycleClock> I2c<SevenBitAddress> for BitBangI2c<P, C> {
         r
     }
 }
-
-#[cfg(test)]
-mod tests;

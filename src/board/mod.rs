@@ -6,9 +6,11 @@
 //!   open-drain GPIOs, fast mode, clock stretching, bus recovery;
 //! - [`servo_pulse`]: the FRC1 servo-pulse schedule (latency-independent
 //!   edges) and the CAS-free loop-to-interrupt handoff of pulse widths;
-//! - [`uart`]: the UART0 baud divider;
-//! - `sim_wire` (tests and the `sim` feature): a wire-level simulated I2C bus
-//!   with register-file slaves, to test the master edge by edge.
+//! - [`uart`]: the UART0 baud divider.
+//!
+//! The board holds no simulator code: `tests/bitbang_i2c.rs` runs the
+//! master cycle by cycle on the simulator's wire (`sim::wire`, the one wire
+//! model, which the emulated board drives too).
 //!
 //! The chip glue, [`esp8266`](self) (`esp8266.rs`), exists only for
 //! `target_arch = "xtensa"` with the `board` feature: esp8266-hal pins as
@@ -19,11 +21,6 @@
 pub mod bitbang_i2c;
 pub mod servo_pulse;
 pub mod uart;
-
-// Host-only test support (a simulated wire for the tests), never on the robot.
-#[cfg(any(test, feature = "sim"))]
-#[allow(clippy::arithmetic_side_effects, clippy::indexing_slicing)]
-pub mod sim_wire;
 
 #[cfg(all(target_arch = "xtensa", feature = "board"))]
 pub mod esp8266;

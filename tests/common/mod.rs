@@ -12,6 +12,7 @@ pub mod i2c;
 pub mod mpu9250;
 pub mod reference;
 pub mod vl53l0x_script;
+pub mod wire;
 
 /// The bias and scale numbers of a `CALIBRATION` line as the robot prints
 /// it (`MagCalibration::from_f64([bx, by, bz], [sx, sy, sz])`).
