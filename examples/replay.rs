@@ -16,7 +16,7 @@
 //! options take the same syntax as `simulate`'s.
 
 use paperbot::host::args;
-use paperbot::math::{Angle, Coord, Length};
+use paperbot::math::{Angle, Coord};
 use paperbot::model::estimator::replay;
 use paperbot::model::measurement::Arena;
 use paperbot::model::Pose;
@@ -53,14 +53,14 @@ fn parse_args() -> Result<Option<Args>, String> {
         }
     }
     let default = Arena::DEFAULT;
-    let arena = arena.unwrap_or((default.length_x.to_mm_f64(), default.width_y.to_mm_f64()));
+    let arena = arena.unwrap_or((default.length_x_mm(), default.width_y_mm()));
     let log = log.ok_or("no log given")?;
     Ok(Some(Args { log, arena, start, out }))
 }
 
 fn run(a: Args) -> Result<(), String> {
     let (lx, wy) = a.arena;
-    let arena = Arena { length_x: Length::from_mm_f64(lx), width_y: Length::from_mm_f64(wy) };
+    let arena = Arena::from_mm_f64(lx, wy);
     // a typed start is checked before the log is read
     let typed = a.start.as_deref().map(|s| args::start(s, lx, wy)).transpose()?;
     let text = std::fs::read_to_string(&a.log).map_err(|e| format!("{}: {e}", a.log))?;
