@@ -225,7 +225,9 @@ fn stop(r: &mut Report, board: &Board, work: &Path, flash: &Path, e: &Expect) ->
 fn watchdog(r: &mut Report, root: &Path, board: &Board, work: &Path) -> Result<(), String> {
     const STARVE_NS: u64 = 500 * MS;
     const STAGES_NS: u64 = 2 * (1 << 26) * 1000 / 80; // 2 x 2^26 cycles at 80 MHz
-    let image = crate::esptool::boot_image(root, &board.watchdog_test_elf(), &work.join("selftest-wdt-"))?;
+    let flash_params = crate::esptool::FlashParams::default();
+    let image =
+        crate::esptool::boot_image(root, &board.watchdog_test_elf(), &work.join("selftest-wdt-"), &flash_params)?;
     let flash = work.join("selftest-wdt-flash.bin");
     std::fs::write(&flash, compose(&read(&image)?, &[])?).map_err(|e| format!("{}: {e}", flash.display()))?;
     let run = boot(board, work, "wdt", &flash, &[], 3.0, "")?;
