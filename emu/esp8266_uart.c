@@ -28,7 +28,11 @@ enum {
 #define UART_STATUS_TXD         (1u << 31)
 #define UART_CONF0_RESET        0x1c            /* 8 data bits, 1 stop bit */
 #define UART_CONF1_RESET        0x6060          /* rx full 96, tx empty 96 */
-#define UART_CLKDIV_RESET       (CPU_HZ / 115200)
+#define UART_CLKDIV_RESET       (CPU_HZ_PLL / 115200)
+/* How far off the listener's rate a byte may be and still be read, and
+ * what it reads otherwise (a frame sampled at the wrong rate). */
+#define UART_BAUD_TOLERANCE_PCT 3
+#define UART_GARBLED            0xff
 
 bool fifo_push(Fifo *f, uint8_t b)
 {
@@ -62,7 +66,7 @@ int64_t uart_frame_ns(Esp8266State *s)
     uint64_t half_bits = 2 * (1 + data_bits + parity) + stop_half_bits;
     uint32_t div = s->uart_clkdiv & 0xfffff;
 
-    return cycles_to_ns(half_bits * MAX(div, 1u) / 2);
+    return cycles_to_ns(s, half_bits * MAX(div, 1u) / 2);
 }
 
 /* RXFIFO_FULL and TXFIFO_EMPTY follow the fill levels against CONF1's
@@ -135,11 +139,29 @@ void input_tick(void *opaque)
                                 : uart_frame_ns(s));
 }
 
+/* The byte as the other end, listening at uart-baud, reads it: the rate is
+ * the CPU clock over CLKDIV (52 MHz before the PLL write, so the ROM's
+ * divider for 115200 at 80 MHz gives 74880 baud). A change of rate is
+ * logged ("uart0-baud N"). */
+static uint8_t uart_as_heard(Esp8266State *s, uint8_t b)
+{
+    uint32_t baud = s->cpu_hz / MAX(s->uart_clkdiv & 0xfffff, 1u);
+    uint64_t off = baud > s->uart_baud ? baud - s->uart_baud
+                                       : s->uart_baud - baud;
+
+    if (baud != s->uart_tx_baud) {
+        s->uart_tx_baud = baud;
+        log_event(s, "uart0-baud %u", baud);
+    }
+    return off * 100 <= (uint64_t)s->uart_baud * UART_BAUD_TOLERANCE_PCT
+           ? b : UART_GARBLED;
+}
+
 /* The byte at the head of the TX FIFO has been shifted out. */
 void uart_tx_done(void *opaque)
 {
     Esp8266State *s = opaque;
-    uint8_t b = fifo_pop(&s->tx);
+    uint8_t b = uart_as_heard(s, fifo_pop(&s->tx));
 
     if (!s->stopped) {
         qemu_chr_fe_write_all(&s->chr, &b, 1);

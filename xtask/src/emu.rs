@@ -14,6 +14,7 @@ mod qemu;
 mod selftest;
 mod sim;
 mod simtest;
+mod strict;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -150,6 +151,7 @@ pub fn main(args: &[String]) -> Result<(), String> {
         input_gap_ms: INPUT_GAP_MS,
         sim: None,
         profile: None,
+        board_options: "",
     };
     let Some(seconds) = options.seconds else {
         return board.run_pty(&session);

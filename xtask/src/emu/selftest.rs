@@ -21,6 +21,9 @@ const PERIOD_TOLERANCE_US: f64 = 20.0;
 /// The LED's half period may be off by this much, ms (the loop's 10 ms tick
 /// polls it).
 const BLINK_TOLERANCE_MS: f64 = 10.0;
+/// The firmware's line when the servo timer interrupt does not run
+/// (src/bin/firmware.rs).
+const FAULT_SERVO_TIMER: &str = "# fault: servo timer interrupt not running";
 
 #[derive(Default)]
 pub(super) struct Report {
@@ -52,8 +55,9 @@ impl Report {
 
 /// The numbers the checks need from src/config.rs.
 pub(super) struct Expect {
-    banner: String,
+    pub(super) banner: String,
     pub(super) deadman_ns: u64,
+    pub(super) fault_servo_timer: &'static str,
     blink_fault_ms: f64,
     frame_us: f64,
     pulse_at_0_us: f64,
@@ -66,6 +70,7 @@ impl Expect {
         let get = |name: &str| config_u32(&config, name).ok_or(format!("src/config.rs has no `const {name}: u32`"));
         Ok(Expect {
             banner: banner(root)?,
+            fault_servo_timer: FAULT_SERVO_TIMER,
             deadman_ns: u64::from(get("DEADMAN_MS")?) * MS,
             blink_fault_ms: f64::from(get("LED_BLINK_FAULT_MS")?),
             frame_us: f64::from(get("FRAME_US")?),
@@ -87,11 +92,12 @@ fn config_u32(source: &str, name: &str) -> Option<u32> {
 }
 
 /// One timed boot: UART0 output and the event log.
-struct Run {
-    output: Output,
-    events: Events,
+pub(super) struct Run {
+    pub(super) output: Output,
+    pub(super) events: Events,
 }
 
+/// A timed boot of `flash` on the board with its default options.
 fn boot(
     board: &Board,
     work: &Path,
@@ -100,6 +106,21 @@ fn boot(
     input: &[&str],
     seconds: f64,
     after: &str,
+) -> Result<Run, String> {
+    boot_with(board, work, name, flash, input, seconds, after, "")
+}
+
+/// A timed boot with more machine options (`uart-baud=74880`, ...).
+#[allow(clippy::too_many_arguments)]
+pub(super) fn boot_with(
+    board: &Board,
+    work: &Path,
+    name: &str,
+    flash: &Path,
+    input: &[&str],
+    seconds: f64,
+    after: &str,
+    board_options: &str,
 ) -> Result<Run, String> {
     let events_path = work.join(format!("selftest-{name}.events"));
     let input_path = work.join(format!("selftest-{name}.input"));
@@ -113,6 +134,7 @@ fn boot(
         input_gap_ms: INPUT_GAP_MS,
         sim: None,
         profile: None,
+        board_options,
     };
     let output = board.run_timed(&session, (seconds * 1000.0) as u32, false)?;
     let events = read_events(&events_path)?;
@@ -152,6 +174,12 @@ fn idle(r: &mut Report, board: &Board, work: &Path, flash: &Path, e: &Expect) ->
     let run = boot(board, work, "idle", flash, &["status"], SECONDS, &e.banner)?;
     let uart = &run.output.uart;
     r.check("banner", uart.contains(&e.banner), format!("'{}' {}", e.banner, found(uart.contains(&e.banner))));
+    let fault = uart.contains(FAULT_SERVO_TIMER);
+    r.check(
+        "the servo timer interrupt runs (PS and INTENABLE taken over from the ROM)",
+        !fault,
+        format!("'{FAULT_SERVO_TIMER}' {}", if fault { "printed" } else { "not printed" }),
+    );
     let status = uart.lines().find(|l| l.starts_with("# status"));
     r.check("status answered", status.is_some(), status.unwrap_or("no '# status' line"));
     let down = ["front=down", "right=down", "compass=down"];
@@ -220,23 +248,32 @@ fn stop(r: &mut Report, board: &Board, work: &Path, flash: &Path, e: &Expect) ->
     Ok(())
 }
 
-/// The test image stops feeding the watchdog after 0.5 s: the board must
-/// reset it two stages (2 x 0.84 s) later, and the ROM boot it again.
+/// A test image (emu/test/probe.c, `mode`) as a DIO boot image on the
+/// board's flash; the flash file.
+pub(super) fn probe_flash(root: &Path, board: &Board, work: &Path, mode: &str) -> Result<std::path::PathBuf, String> {
+    let flash_params = crate::esptool::FlashParams::default();
+    let prefix = work.join(format!("selftest-probe-{mode}-"));
+    let image = crate::esptool::boot_image(root, &board.probe_elf(mode), &prefix, &flash_params)?;
+    let flash = work.join(format!("selftest-probe-{mode}-flash.bin"));
+    std::fs::write(&flash, compose(&read(&image)?, &[])?).map_err(|e| format!("{}: {e}", flash.display()))?;
+    Ok(flash)
+}
+
+/// The test image stops feeding the watchdog 0.5 s after its PLL write:
+/// the board must reset it two stages (2 x 0.84 s) later, and the ROM boot
+/// it again.
 fn watchdog(r: &mut Report, root: &Path, board: &Board, work: &Path) -> Result<(), String> {
     const STARVE_NS: u64 = 500 * MS;
     const STAGES_NS: u64 = 2 * (1 << 26) * 1000 / 80; // 2 x 2^26 cycles at 80 MHz
-    let flash_params = crate::esptool::FlashParams::default();
-    let image =
-        crate::esptool::boot_image(root, &board.watchdog_test_elf(), &work.join("selftest-wdt-"), &flash_params)?;
-    let flash = work.join("selftest-wdt-flash.bin");
-    std::fs::write(&flash, compose(&read(&image)?, &[])?).map_err(|e| format!("{}: {e}", flash.display()))?;
+    let flash = probe_flash(root, board, work, "wdt")?;
     let run = boot(board, work, "wdt", &flash, &[], 3.0, "")?;
     let resets = &run.events.watchdog_resets;
-    let want = STARVE_NS + STAGES_NS;
+    let pll_at = run.events.first("cpu-clock 80000000").map_or(0, |&(ns, _)| ns);
+    let want = pll_at + STARVE_NS + STAGES_NS;
     let at = resets.first().copied().unwrap_or(0);
     let close = at.abs_diff(want) < MS;
     let uart = &run.output.uart;
-    let rebooted = uart.contains("wdt-test: starving") && uart.contains("wdt-test: boot 2");
+    let rebooted = uart.contains("probe: starving") && uart.contains("probe: boot 2");
     let reported = run.output.stderr.contains("watchdog reset");
     r.check(
         "an image that stops feeding the watchdog is reset",
@@ -270,6 +307,7 @@ pub fn run(root: &Path, board: &Board, work: &Path, boot_bin: &Path, irom_bin: &
     deadman(&mut report, board, work, &flash, &expect)?;
     stop(&mut report, board, work, &flash, &expect)?;
     watchdog(&mut report, root, board, work)?;
+    super::strict::run(&mut report, root, board, work, &expect)?;
     println!("{} passed, {} failed", report.passed, report.failed);
     if report.failed > 0 {
         return Err(format!("fw-emu self-test: {} check(s) failed", report.failed));
@@ -293,6 +331,7 @@ mod tests {
     fn servo_widths_match_the_issue() {
         let e = Expect {
             banner: String::new(),
+            fault_servo_timer: FAULT_SERVO_TIMER,
             deadman_ns: 0,
             blink_fault_ms: 0.0,
             frame_us: 0.0,
