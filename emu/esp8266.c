@@ -143,7 +143,12 @@ static uint64_t regfile_io_read(void *opaque, hwaddr addr, unsigned size)
 static void regfile_io_write(void *opaque, hwaddr addr, uint64_t v,
                              unsigned size)
 {
-    regfile_write(opaque, addr, v);
+    RegFile *f = opaque;
+
+    regfile_write(f, addr, v);
+    if (f->written) {
+        f->written(f->written_opaque);
+    }
 }
 
 /* Peripheral registers are 32-bit; narrower accesses are widened by QEMU. */
@@ -334,19 +339,20 @@ static void map_peripherals(Esp8266State *s)
                           "esp8266.periph", PERIPH_SIZE);
     memory_region_add_subregion(get_system_memory(), PERIPH_BASE, catch_all);
 
-    regfile_init(&s->dport, "esp8266.dport", DPORT_BASE, DPORT_SIZE, false);
-    map_io(s, &s->dport_mr, &dport_ops, s, "esp8266.dport", DPORT_BASE,
-           DPORT_SIZE);
+    /* DPORT SPI_CACHE and SPI0 CTRL decide whether the flash is readable */
+    map_regfile(s, &s->dport, "esp8266.dport", DPORT_BASE, DPORT_SIZE, false);
+    s->dport.written = flash_update_map;
+    s->dport.written_opaque = s;
     map_regfile(s, &s->io_mux, "esp8266.io_mux", PERIPH_BASE + IO_MUX_OFFSET,
                 0x100, false);
     regfile_init(&s->rtc_cntl, "esp8266.rtc_cntl",
                  PERIPH_BASE + RTC_CNTL_OFFSET, 0x100, false);
     map_io(s, &s->rtc_cntl_mr, &rtc_cntl_ops, s, "esp8266.rtc_cntl",
            PERIPH_BASE + RTC_CNTL_OFFSET, 0x100);
-    regfile_init(&s->spi0, "esp8266.spi0", PERIPH_BASE + SPI0_OFFSET, 0x100,
-                 false);
-    map_io(s, &s->spi0_mr, &spi0_ops, s, "esp8266.spi0",
-           PERIPH_BASE + SPI0_OFFSET, 0x100);
+    map_regfile(s, &s->spi0, "esp8266.spi0", PERIPH_BASE + SPI0_OFFSET, 0x100,
+                false);
+    s->spi0.written = flash_update_map;
+    s->spi0.written_opaque = s;
     regfile_init(&s->rtc, "esp8266.rtc", PERIPH_BASE + RTC_OFFSET, 0x100, false);
 
     map_io(s, &s->uart_mr, &uart_ops, s, "esp8266.uart0",

@@ -100,6 +100,8 @@ typedef struct RegFile {
     bool log_unimp;         /* log each register's first read and write */
     uint32_t *regs;
     uint8_t *logged;        /* bit 0: read logged, bit 1: write logged */
+    void (*written)(void *opaque);  /* after each write, when set */
+    void *written_opaque;
 } RegFile;
 
 typedef struct Fifo {
@@ -128,7 +130,7 @@ struct Esp8266State {
     bool stopped;               /* past stop-ms: nothing more leaves the board */
 
     MemoryRegion flash_mr, flash_off_mr, dport_mr, periph_mr, uart_mr, gpio_mr,
-                 rtc_mr, frc1_mr, wdt_mr, spi0_mr, rtc_cntl_mr;
+                 rtc_mr, frc1_mr, wdt_mr, rtc_cntl_mr;
     RegFile dport, periph, rtc, io_mux, rtc_cntl, spi0;
     bool flash_readable;        /* the cache on, in a mode the flash answers */
     bool flash_off_logged;
@@ -204,9 +206,9 @@ void esp8266_reset(void *opaque);
 void stop_expired(void *opaque);
 
 /* esp8266_clock.c: the CPU clock, the PLL, the flash cache and SPI0 */
-extern const MemoryRegionOps dport_ops, spi0_ops, rtc_cntl_ops, flash_off_ops;
+extern const MemoryRegionOps rtc_cntl_ops, flash_off_ops;
 void clock_reset(Esp8266State *s);
-void flash_update_map(Esp8266State *s);
+void flash_update_map(void *opaque);
 bool parse_flash_mode(const char *name, FlashMode *mode);
 
 /* esp8266_uart.c: UART0 */

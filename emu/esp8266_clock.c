@@ -153,8 +153,11 @@ static bool flash_answers(Esp8266State *s, FlashMode m)
     return m >= s->flash_best;
 }
 
-void flash_update_map(Esp8266State *s)
+/* After a write to DPORT or SPI0 (their register files' hook) and at reset:
+ * the window mapped or not. */
+void flash_update_map(void *opaque)
 {
+    Esp8266State *s = opaque;
     bool cache_on = s->dport.regs[DPORT_SPI_CACHE / 4] & SPI_CACHE_ENABLE;
     FlashMode mode = spi0_mode(s);
     bool readable = cache_on && flash_answers(s, mode);
@@ -203,50 +206,4 @@ const MemoryRegionOps flash_off_ops = {
     .write_with_attrs = flash_off_write,
     .endianness = DEVICE_LITTLE_ENDIAN,
     .valid = { .min_access_size = 1, .max_access_size = 4 },
-};
-
-static uint64_t dport_read(void *opaque, hwaddr addr, unsigned size)
-{
-    Esp8266State *s = opaque;
-    return regfile_read(&s->dport, addr);
-}
-
-static void dport_write(void *opaque, hwaddr addr, uint64_t v, unsigned size)
-{
-    Esp8266State *s = opaque;
-
-    regfile_write(&s->dport, addr, v);
-    if (addr == DPORT_SPI_CACHE) {
-        flash_update_map(s);
-    }
-}
-
-const MemoryRegionOps dport_ops = {
-    .read = dport_read,
-    .write = dport_write,
-    .endianness = DEVICE_LITTLE_ENDIAN,
-    .impl = { .min_access_size = 4, .max_access_size = 4 },
-};
-
-static uint64_t spi0_read(void *opaque, hwaddr addr, unsigned size)
-{
-    Esp8266State *s = opaque;
-    return regfile_read(&s->spi0, addr);
-}
-
-static void spi0_write(void *opaque, hwaddr addr, uint64_t v, unsigned size)
-{
-    Esp8266State *s = opaque;
-
-    regfile_write(&s->spi0, addr, v);
-    if (addr == SPI0_CTRL) {
-        flash_update_map(s);
-    }
-}
-
-const MemoryRegionOps spi0_ops = {
-    .read = spi0_read,
-    .write = spi0_write,
-    .endianness = DEVICE_LITTLE_ENDIAN,
-    .impl = { .min_access_size = 4, .max_access_size = 4 },
 };

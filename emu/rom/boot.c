@@ -211,13 +211,18 @@ static const char *cause_name(uint32_t cause)
 }
 
 /* An exception or interrupt at the ROM's vectors (VECBASE 0x40000000: the
- * image has not moved it yet). `vector`: a name from reset.S. */
-void __attribute__((noreturn)) rom_exception(const char *vector)
+ * image has not moved it yet). `vector`: a name from reset.S; a double
+ * exception (one taken with PS.EXCM set) keeps its PC in DEPC, not EPC1. */
+void __attribute__((noreturn)) rom_exception(const char *vector, int is_double)
 {
-    uint32_t cause, epc1, excvaddr;
+    uint32_t cause, pc, excvaddr;
 
     __asm__ volatile("rsr %0, exccause" : "=r"(cause));
-    __asm__ volatile("rsr %0, epc1" : "=r"(epc1));
+    if (is_double) {
+        __asm__ volatile("rsr %0, depc" : "=r"(pc));
+    } else {
+        __asm__ volatile("rsr %0, epc1" : "=r"(pc));
+    }
     __asm__ volatile("rsr %0, excvaddr" : "=r"(excvaddr));
     put_str("\r\nrom: ");
     put_str(vector);
@@ -225,8 +230,8 @@ void __attribute__((noreturn)) rom_exception(const char *vector)
     put_dec(cause);
     put_str(" (");
     put_str(cause_name(cause));
-    put_str("), EPC1 ");
-    put_hex(epc1, 8);
+    put_str(is_double ? "), DEPC " : "), EPC1 ");
+    put_hex(pc, 8);
     put_str(", EXCVADDR ");
     put_hex(excvaddr, 8);
     stop("\r\n");

@@ -69,18 +69,21 @@ rom_reset:
     .align  4
 rom_vec_user:
     l32r    a2, .Lname_user
-    j       rom_vec_report
+    j       rom_vec_single
 rom_vec_kernel:
     l32r    a2, .Lname_kernel
-    j       rom_vec_report
+    j       rom_vec_single
 rom_vec_double:
     l32r    a2, .Lname_double
+    movi    a3, 1                   /* the PC is in DEPC */
     j       rom_vec_report
 rom_vec_debug:
     l32r    a2, .Lname_debug
-    j       rom_vec_report
+    j       rom_vec_single
 rom_vec_other:
     l32r    a2, .Lname_other
+rom_vec_single:
+    movi    a3, 0
 rom_vec_report:
     l32r    a1, .Lvec_stack
     call0   rom_exception           /* never returns */

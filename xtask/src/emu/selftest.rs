@@ -97,22 +97,10 @@ pub(super) struct Run {
     pub(super) events: Events,
 }
 
-/// A timed boot of `flash` on the board with its default options.
-fn boot(
-    board: &Board,
-    work: &Path,
-    name: &str,
-    flash: &Path,
-    input: &[&str],
-    seconds: f64,
-    after: &str,
-) -> Result<Run, String> {
-    boot_with(board, work, name, flash, input, seconds, after, "")
-}
-
-/// A timed boot with more machine options (`uart-baud=74880`, ...).
+/// A timed boot of `flash`, with more machine options (`uart-baud=74880`,
+/// ...) or none ("").
 #[allow(clippy::too_many_arguments)]
-pub(super) fn boot_with(
+pub(super) fn boot(
     board: &Board,
     work: &Path,
     name: &str,
@@ -171,7 +159,7 @@ fn check_pulses(r: &mut Report, run: &Run, name: &str, from: u64, to: u64, width
 /// failing, the wheels still, LED blink, no watchdog reset.
 fn idle(r: &mut Report, board: &Board, work: &Path, flash: &Path, e: &Expect) -> Result<(), String> {
     const SECONDS: f64 = 10.0;
-    let run = boot(board, work, "idle", flash, &["status"], SECONDS, &e.banner)?;
+    let run = boot(board, work, "idle", flash, &["status"], SECONDS, &e.banner, "")?;
     let uart = &run.output.uart;
     r.check("banner", uart.contains(&e.banner), format!("'{}' {}", e.banner, found(uart.contains(&e.banner))));
     let fault = uart.contains(FAULT_SERVO_TIMER);
@@ -220,7 +208,7 @@ fn idle(r: &mut Report, board: &Board, work: &Path, flash: &Path, e: &Expect) ->
 
 /// `servo 120 60 5` (5 s): the commanded widths.
 fn servo(r: &mut Report, board: &Board, work: &Path, flash: &Path, e: &Expect) -> Result<(), String> {
-    let run = boot(board, work, "servo", flash, &["servo 120 60 5"], 1.5, &e.banner)?;
+    let run = boot(board, work, "servo", flash, &["servo 120 60 5"], 1.5, &e.banner, "")?;
     let t = input_time(&run, "servo 120 60 5")?;
     let driving = [e.width_us(120.0), e.width_us(60.0)];
     check_pulses(r, &run, "servo 120 60 5", t + 60 * MS, u64::MAX, driving, e);
@@ -230,7 +218,7 @@ fn servo(r: &mut Report, board: &Board, work: &Path, flash: &Path, e: &Expect) -
 /// `servo 120 60` (no duration: until the next command), then silence: the
 /// commanded widths until the deadman stops the wheels, neutral after.
 fn deadman(r: &mut Report, board: &Board, work: &Path, flash: &Path, e: &Expect) -> Result<(), String> {
-    let run = boot(board, work, "deadman", flash, &["servo 120 60"], 2.0, &e.banner)?;
+    let run = boot(board, work, "deadman", flash, &["servo 120 60"], 2.0, &e.banner, "")?;
     let t = input_time(&run, "servo 120 60")?;
     let driving = [e.width_us(120.0), e.width_us(60.0)];
     check_pulses(r, &run, "servo 120 60 until the deadman", t + 60 * MS, t + e.deadman_ns - 50 * MS, driving, e);
@@ -241,7 +229,7 @@ fn deadman(r: &mut Report, board: &Board, work: &Path, flash: &Path, e: &Expect)
 
 /// `servo 120 60 5` then `stop` 100 ms later: neutral before the deadman.
 fn stop(r: &mut Report, board: &Board, work: &Path, flash: &Path, e: &Expect) -> Result<(), String> {
-    let run = boot(board, work, "stop", flash, &["servo 120 60 5", "stop"], 1.5, &e.banner)?;
+    let run = boot(board, work, "stop", flash, &["servo 120 60 5", "stop"], 1.5, &e.banner, "")?;
     let t = input_time(&run, "stop")?;
     let neutral = [e.width_us(90.0); 2];
     check_pulses(r, &run, "neutral after stop", t + 40 * MS, t + e.deadman_ns - 50 * MS, neutral, e);
@@ -266,7 +254,7 @@ fn watchdog(r: &mut Report, root: &Path, board: &Board, work: &Path) -> Result<(
     const STARVE_NS: u64 = 500 * MS;
     const STAGES_NS: u64 = 2 * (1 << 26) * 1000 / 80; // 2 x 2^26 cycles at 80 MHz
     let flash = probe_flash(root, board, work, "wdt")?;
-    let run = boot(board, work, "wdt", &flash, &[], 3.0, "")?;
+    let run = boot(board, work, "wdt", &flash, &[], 3.0, "", "")?;
     let resets = &run.events.watchdog_resets;
     let pll_at = run.events.first("cpu-clock 80000000").map_or(0, |&(ns, _)| ns);
     let want = pll_at + STARVE_NS + STAGES_NS;

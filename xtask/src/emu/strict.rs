@@ -23,7 +23,7 @@ use object::{Object, ObjectSection, ObjectSymbol};
 use super::flash::compose;
 use super::qemu::Board;
 use super::read;
-use super::selftest::{boot_with, probe_flash, Expect, Report, Run};
+use super::selftest::{boot, probe_flash, Expect, Report, Run};
 use crate::esptool::{boot_image, FlashParams};
 
 /// The board's listener at the ROM's rate: 115200 * 26 / 40 (a 26 MHz
@@ -86,7 +86,7 @@ impl Firmware<'_> {
         e: &Expect,
         options: &str,
     ) -> Result<Run, String> {
-        boot_with(self.board, self.work, &format!("strict-{name}"), flash, input, seconds, &e.banner, options)
+        boot(self.board, self.work, &format!("strict-{name}"), flash, input, seconds, &e.banner, options)
     }
 }
 
@@ -227,12 +227,12 @@ fn cache_off(r: &mut Report, fw: &Firmware, e: &Expect) -> Result<(), String> {
 
 /// The probes: RAM at power-up, the PLL, narrow loads, GPIO0 at a reset.
 fn probes(r: &mut Report, root: &Path, board: &Board, work: &Path) -> Result<(), String> {
-    let boot = |mode: &str, seconds: f64, options: &str| -> Result<Run, String> {
+    let run_probe = |mode: &str, seconds: f64, options: &str| -> Result<Run, String> {
         let flash = probe_flash(root, board, work, mode)?;
-        boot_with(board, work, &format!("probe-{mode}"), &flash, &[], seconds, "", options)
+        boot(board, work, &format!("probe-{mode}"), &flash, &[], seconds, "", options)
     };
 
-    let run = boot("ram", 0.2, "")?;
+    let run = run_probe("ram", 0.2, "")?;
     let line = line_from(&run.output.uart, "probe: unloaded").unwrap_or("").to_string();
     let word = line.rsplit(' ').next().unwrap_or("");
     r.check(
@@ -241,8 +241,8 @@ fn probes(r: &mut Report, root: &Path, board: &Board, work: &Path) -> Result<(),
         if line.is_empty() { "no probe line".into() } else { line },
     );
 
-    let fast = boot("no-pll", 0.2, "")?;
-    let slow = boot("no-pll", 0.2, ROM_BAUD)?;
+    let fast = run_probe("no-pll", 0.2, "")?;
+    let slow = run_probe("no-pll", 0.2, ROM_BAUD)?;
     let at_115200 = fast.output.uart.contains("probe: no PLL write");
     let at_74880 = slow.output.uart.contains("probe: no PLL write");
     r.check(
@@ -256,7 +256,7 @@ fn probes(r: &mut Report, root: &Path, board: &Board, work: &Path) -> Result<(),
     );
 
     for (mode, what) in [("narrow-iram", "an 8-bit load from IRAM"), ("narrow-flash", "a 16-bit load from flash")] {
-        let run = boot(mode, 0.2, "")?;
+        let run = run_probe(mode, 0.2, "")?;
         let report = line_from(&run.output.uart, "rom: ").unwrap_or("").to_string();
         let loaded = run.output.uart.contains("no exception");
         r.check(
@@ -266,7 +266,7 @@ fn probes(r: &mut Report, root: &Path, board: &Board, work: &Path) -> Result<(),
         );
     }
 
-    let run = boot("gpio0-low", 3.0, "")?;
+    let run = run_probe("gpio0-low", 3.0, "")?;
     let download = run.events.first("download-mode").is_some() && run.output.stderr.contains("UART download mode");
     let boots = run.output.uart.matches("probe: boot").count();
     r.check(
