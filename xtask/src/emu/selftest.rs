@@ -168,6 +168,15 @@ fn idle(r: &mut Report, board: &Board, work: &Path, flash: &Path, e: &Expect) ->
         !fault,
         format!("'{FAULT_SERVO_TIMER}' {}", if fault { "printed" } else { "not printed" }),
     );
+    // from the CR LF before the banner to the end: every LF after a CR
+    let from_banner = uart.find(&e.banner).map_or("", |at| &uart[at.saturating_sub(2)..]);
+    let bare = from_banner.as_bytes().windows(2).filter(|w| w[1] == b'\n' && w[0] != b'\r').count();
+    let lines = from_banner.matches('\n').count();
+    r.check(
+        "every line on UART0 ends in CR LF",
+        !from_banner.is_empty() && bare == 0,
+        format!("{lines} lines from the banner on, {bare} ending in a bare LF"),
+    );
     let status = uart.lines().find(|l| l.starts_with("# status"));
     r.check("status answered", status.is_some(), status.unwrap_or("no '# status' line"));
     let down = ["front=down", "right=down", "compass=down"];
