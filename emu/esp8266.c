@@ -399,6 +399,7 @@ static void esp8266_init(MachineState *machine)
     s->frc1_timer = timer_new_ns(QEMU_CLOCK_VIRTUAL, frc1_expired, s);
     s->wdt_timer = timer_new_ns(QEMU_CLOCK_VIRTUAL, wdt_expired, s);
     s->frc1_irq = s->cpu->env.irq_inputs[FRC1_CPU_IRQ];
+    s->uart_irq = s->cpu->env.irq_inputs[UART_CPU_IRQ];
 
     if (serial_hd(0)) {
         qemu_chr_fe_init(&s->chr, serial_hd(0), &error_abort);

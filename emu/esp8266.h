@@ -61,6 +61,9 @@ OBJECT_DECLARE_SIMPLE_TYPE(Esp8266State, ESP8266_MACHINE)
 
 /* CPU interrupt of FRC1 (core-isa.h: interrupt 9 is external, edge). */
 #define FRC1_CPU_IRQ      9
+/* CPU interrupt of UART0 (core-isa.h: interrupt 5 is external, level;
+ * esp8266-hal InterruptType::UART). */
+#define UART_CPU_IRQ      5
 /* DPORT EDGE_INT_ENABLE: bit 1 lets FRC1's edge interrupt through. */
 #define DPORT_EDGE_INT_ENABLE   0x04
 #define EDGE_INT_FRC1           (1u << 1)
@@ -140,6 +143,7 @@ struct Esp8266State {
     Fifo tx, rx;
     uint32_t uart_int_raw, uart_int_ena, uart_clkdiv, uart_conf0, uart_conf1;
     QEMUTimer *tx_timer;
+    qemu_irq uart_irq;
     /* deterministic input (uart-input) */
     uint8_t *input;
     size_t input_len, input_pos;

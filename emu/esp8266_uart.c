@@ -2,7 +2,8 @@
  * esp8266_uart: UART0 (0x60000000) of the paperbot ESP8266 board.
  *
  * From the ESP8266 Technical Reference (TRM), UART registers: the 128-byte
- * TX and RX FIFOs, INT_RAW/ST/ENA/CLR (RXFIFO_FULL, TXFIFO_EMPTY, overflow),
+ * TX and RX FIFOs, INT_RAW/ST/ENA/CLR (RXFIFO_FULL, TXFIFO_EMPTY, overflow;
+ * CPU interrupt 5 while one enabled is raised),
  * CLKDIV, STATUS, CONF0/1; bytes leave and arrive at the baud rate of CLKDIV
  * and CONF0's frame. Also the board's deterministic input (uart-input=FILE):
  * a line at a time, input-gap-ms apart, once UART0 TX has sent the text
@@ -14,6 +15,7 @@
 #include "qemu/osdep.h"
 #include "qemu/log.h"
 #include "qemu/error-report.h"
+#include "hw/irq.h"
 #include "esp8266.h"
 
 enum {
@@ -70,7 +72,8 @@ int64_t uart_frame_ns(Esp8266State *s)
 }
 
 /* RXFIFO_FULL and TXFIFO_EMPTY follow the fill levels against CONF1's
- * thresholds; they are levels, not latched. */
+ * thresholds; they are levels, not latched. UART0's CPU interrupt (5, a
+ * level one) is raised while INT_RAW & INT_ENA is not zero. */
 static void uart_update_levels(Esp8266State *s)
 {
     unsigned rx_full = s->uart_conf1 & 0x7f;
@@ -83,6 +86,7 @@ static void uart_update_levels(Esp8266State *s)
     if (s->tx.count < tx_empty) {
         s->uart_int_raw |= UART_INT_TXFIFO_EMPTY;
     }
+    qemu_set_irq(s->uart_irq, (s->uart_int_raw & s->uart_int_ena) != 0);
 }
 
 void uart_receive_byte(Esp8266State *s, uint8_t b)
@@ -230,6 +234,7 @@ static void uart_write(void *opaque, hwaddr addr, uint64_t v, unsigned size)
         break;
     case UART_INT_ENA:
         s->uart_int_ena = v;
+        uart_update_levels(s);
         break;
     case UART_INT_CLR:
         s->uart_int_raw &= ~v;

@@ -20,7 +20,11 @@
  *      flash mode (SPI0 CTRL): a mode the board's flash does not answer
  *      reads as all ones, and the image fails its checks;
  *   4. each segment copied to its address, the checksum checked;
- *   5. the cache off again, UART0 drained; reset.S hands over to the entry.
+ *   5. the cache off again, UART0 drained, its TX-FIFO-empty interrupt left
+ *      enabled (asserted from then on: the FIFO is empty); reset.S hands
+ *      over to the entry with that interrupt among INTENABLE's bits. What
+ *      Espressif's ROM leaves in UART0 is not documented: this is the
+ *      board's worst case, so that a foreign INTENABLE bit bites.
  *
  * The flash is read in 32-bit words only: the cache window takes no
  * narrower load (see the board's narrow-load check).
@@ -31,6 +35,8 @@
 #define UART0_FIFO          0x60000000u
 #define UART0_CLKDIV        0x60000014u
 #define UART0_STATUS        0x6000001cu
+#define UART0_INT_ENA       0x6000000cu
+#define UART_TXFIFO_EMPTY   (1u << 1)
 #define SPI0_CTRL           0x60000208u
 #define GPIO_IN             0x60000318u
 #define RTC_RESET_CAUSE     0x60000714u
@@ -188,6 +194,7 @@ uint32_t rom_boot(void)
     }
     REG(DPORT_SPI_CACHE) &= ~SPI_CACHE_ENABLE;
     drain_uart();
+    REG(UART0_INT_ENA) = UART_TXFIFO_EMPTY;
     return entry;
 }
 

@@ -7,8 +7,10 @@
  * loads the boot image and returns its entry, which is called as the
  * chip's ROM hands over: interrupts masked, PS = UM | EXCM | INTLEVEL 15,
  * and INTENABLE holding bits the image does not own (SLC, UART, watchdog:
- * ESP8266 interrupts 0, 5, 8). An image must set PS and INTENABLE itself;
- * one that does not never takes an interrupt.
+ * ESP8266 interrupts 0, 5, 8), UART0's among them live (rom_boot leaves
+ * its TX-FIFO-empty interrupt enabled). An image must set PS and
+ * INTENABLE itself: one that keeps PS never takes an interrupt, one that
+ * keeps INTENABLE takes UART0's, which it has no handler for, for ever.
  *
  * An exception or interrupt at the ROM's vectors (before the image moves
  * VECBASE) is reported by rom_exception() with EXCCAUSE, EPC1 and EXCVADDR.

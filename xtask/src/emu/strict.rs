@@ -10,6 +10,7 @@
 //! | the ROM boots the header's flash mode only if the flash answers it | the firmware with a QIO header | no start, `flash-mode-refused qio` |
 //! | the ROM's lines at 74880 baud, the firmware's at 115200 after its PLL write | a probe without the PLL write | its line garbage at 115200, readable at 74880 |
 //! | interrupts masked at hand-over | the firmware with its PS/INTENABLE take-over skipped | the firmware's own fault line, no servo pulses |
+//! | ... and INTENABLE holding the ROM's bits, UART0's live | the firmware with only its INTENABLE write skipped | it never gets to its banner |
 //! | flash unreadable until the cache is on | the firmware entered at xtensa-lx-rt's `Reset` (in flash), not esp8266-hal's `ESP8266Reset` | `flash-cache-off`, the ROM's exception report |
 //! | RAM not zero at power-up | a probe that prints a word it never wrote | not zero |
 //! | 8/16-bit loads from IRAM or flash | two probes | EXCCAUSE 3 (LoadStoreError) |
@@ -21,9 +22,9 @@ use std::path::{Path, PathBuf};
 use object::{Object, ObjectSection, ObjectSymbol};
 
 use super::flash::compose;
-use super::qemu::Board;
-use super::read;
+use super::qemu::{Board, Session};
 use super::selftest::{boot, probe_flash, Expect, Report, Run};
+use super::{read, read_events};
 use crate::esptool::{boot_image, FlashParams};
 
 /// The board's listener at the ROM's rate: 115200 * 26 / 40 (a 26 MHz
@@ -41,6 +42,7 @@ pub(super) fn run(r: &mut Report, root: &Path, board: &Board, work: &Path, e: &E
     rom_baud(r, &firmware, e)?;
     qio_header(r, &firmware, e)?;
     handover(r, &firmware, e)?;
+    intenable_kept(r, &firmware, e)?;
     cache_off(r, &firmware, e)?;
     probes(r, root, board, work)?;
     panic_with_xshut_low(r, &firmware, e)?;
@@ -114,6 +116,31 @@ fn write_at(elf: &mut [u8], addr: u32, bytes: &[u8]) -> Result<(), String> {
     Ok(())
 }
 
+/// The ELF's code symbols, by address, each taken to run to the next (the
+/// assembly's have no size): (address, demangled name).
+fn text_symbols(elf: &[u8]) -> Result<Vec<(u64, String)>, String> {
+    let file = object::File::parse(elf).map_err(|e| format!("ELF: {e}"))?;
+    let mut symbols: Vec<(u64, String)> = file
+        .symbols()
+        .filter(|s| s.kind() == object::SymbolKind::Text)
+        .filter_map(|s| Some((s.address(), format!("{:#}", rustc_demangle::demangle(s.name().ok()?)))))
+        .collect();
+    symbols.sort();
+    Ok(symbols)
+}
+
+/// `len` bytes at `addr` in the ELF's loaded sections.
+fn elf_bytes(elf: &[u8], addr: u32, len: usize) -> Result<Vec<u8>, String> {
+    let file = object::File::parse(elf).map_err(|e| format!("ELF: {e}"))?;
+    file.sections()
+        .find_map(|s| {
+            let at = u64::from(addr).checked_sub(s.address())?;
+            let data = s.data().ok()?;
+            data.get(at as usize..at as usize + len).map(<[u8]>::to_vec)
+        })
+        .ok_or_else(|| format!("{addr:#010x} is in no section of the ELF"))
+}
+
 /// The ELF32 header's entry point (e_entry, offset 24, little-endian).
 fn set_entry(elf: &mut [u8], entry: u32) {
     elf[24..28].copy_from_slice(&entry.to_le_bytes());
@@ -128,6 +155,12 @@ fn line_from<'a>(uart: &'a str, needle: &str) -> Option<&'a str> {
 
 /// Xtensa `ret` (call0 ABI), 3 bytes.
 const RET: [u8; 3] = [0x80, 0x00, 0x00];
+/// The functions of the level-1 interrupt path (xtensa/asm/xtensa_lx_rt.S,
+/// xtensa-lx-rt, esp8266-hal's dispatcher), by part of their names.
+const INTERRUPT_PATH: [&str; 5] = ["ExceptionVector", "_exception", "save_context", "restore_context", "interrupt"];
+/// Xtensa `wsr.intenable a2`, 3 bytes, and `nop`.
+const WSR_INTENABLE_A2: [u8; 3] = [0x20, 0xe4, 0x13];
+const NOP: [u8; 3] = [0xf0, 0x20, 0x00];
 /// Xtensa `ill`: an illegal instruction (all zeros), 3 bytes.
 const ILL: [u8; 3] = [0x00, 0x00, 0x00];
 
@@ -198,6 +231,69 @@ fn handover(r: &mut Report, fw: &Firmware, e: &Expect) -> Result<(), String> {
             e.fault_servo_timer,
             if fault { "printed" } else { "NOT printed" },
             if answered { "answered" } else { "not answered" }
+        ),
+    );
+    Ok(())
+}
+
+/// The firmware with only the INTENABLE half of its take-over skipped (its
+/// `wsr.intenable` made a `nop`): PS comes down with the ROM's INTENABLE
+/// bits still on, UART0's level interrupt among them, which it has no
+/// handler for: it takes that interrupt for ever and never gets to its
+/// banner.
+fn intenable_kept(r: &mut Report, fw: &Firmware, e: &Expect) -> Result<(), String> {
+    let elf = fw.patched("intenable", |elf| {
+        let at = symbol(elf, |n| n == "paperbot_interrupt_handover")?;
+        let code = elf_bytes(elf, at, 16)?;
+        let offset = code
+            .windows(3)
+            .position(|w| w == WSR_INTENABLE_A2)
+            .ok_or("no wsr.intenable a2 in paperbot_interrupt_handover")?;
+        write_at(elf, at + offset as u32, &NOP)
+    })?;
+    let flash = fw.flash("intenable", &elf, &FlashParams::default())?;
+    let events = fw.work.join("strict-intenable.events");
+    let profile = fw.work.join("strict-intenable.profile");
+    let session = Session {
+        flash: &flash,
+        events: &events,
+        input: None,
+        input_after: "",
+        input_gap_ms: super::INPUT_GAP_MS,
+        sim: None,
+        profile: Some(&profile),
+        board_options: "",
+    };
+    let output = fw.board.run_timed(&session, 1000, false)?;
+    let booted = read_events(&events)?.first("cpu-clock 80000000").is_some();
+    let banner = output.uart.contains(&e.banner);
+    // where the CPU was: the level-1 interrupt path (vector, context save
+    // and restore, esp8266-hal's dispatcher)
+    let symbols = text_symbols(&read(&elf)?)?;
+    let (mut all, mut in_interrupt) = (0u64, 0u64);
+    for line in std::fs::read_to_string(&profile).map_err(|e| format!("{}: {e}", profile.display()))?.lines() {
+        let w: Vec<&str> = line.split_whitespace().collect();
+        let (Some(Ok(pc)), Some(Ok(n))) =
+            (w.first().map(|v| u64::from_str_radix(v, 16)), w.get(2).map(|v| v.parse::<u64>()))
+        else {
+            continue;
+        };
+        let i = symbols.partition_point(|(a, _)| *a <= pc);
+        let name = i.checked_sub(1).and_then(|i| symbols.get(i)).map_or("", |(_, n)| n.as_str());
+        all += n;
+        if INTERRUPT_PATH.iter().any(|p| name.contains(p)) {
+            in_interrupt += n;
+        }
+    }
+    let share = in_interrupt as f64 / all.max(1) as f64;
+    r.check(
+        "negative: the firmware that keeps the ROM's INTENABLE bits never gets past UART0's interrupt",
+        booted && !banner && share > 0.9,
+        format!(
+            "PLL written {}, banner {}, {:.1} % of the PC samples in the level-1 interrupt path",
+            if booted { "(the image ran)" } else { "NOT (the image never ran)" },
+            if banner { "printed (wrong)" } else { "never printed" },
+            share * 100.0
         ),
     );
     Ok(())
