@@ -417,6 +417,13 @@ mod tests {
     use super::*;
 
     #[test]
+    fn a_line_is_found_after_the_garbage_of_another_baud_rate() {
+        let uart = "\u{fffd}\u{fffd}probe: unloaded DRAM word 0x3ffe9000 reads 0xa5a5a5a5\r\nnext\r\n";
+        assert_eq!(line_from(uart, "probe: unloaded"), Some("probe: unloaded DRAM word 0x3ffe9000 reads 0xa5a5a5a5"));
+        assert_eq!(line_from(uart, "rom: "), None);
+    }
+
+    #[test]
     fn set_entry_writes_the_elf_header_field() {
         let mut elf = vec![0u8; 32];
         set_entry(&mut elf, 0x4022_1560);
