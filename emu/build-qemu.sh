@@ -4,7 +4,7 @@
 # prints the directory that holds both:
 #
 #   ${XDG_CACHE_HOME:-$HOME/.cache}/paperbot/emu-<hash of emu/'s sources>/
-#       qemu-system-xtensa   rom.elf   wdt-starve.elf (a test image)
+#       qemu-system-xtensa   rom.elf   probe-<mode>.elf (test images)
 #
 # Cached: a second run with unchanged sources prints the directory at once.
 # The QEMU source tree and its build directory stay in the cache too, so an
@@ -27,7 +27,10 @@ sources_hash() {
 }
 
 out=$cache/emu-$(sources_hash)
-if [ -x "$out/qemu-system-xtensa" ] && [ -f "$out/rom.elf" ] && [ -f "$out/wdt-starve.elf" ]; then
+# The test images (emu/test/probe.c), one per mode.
+probe_modes=(wdt gpio0-low no-pll ram narrow-iram narrow-flash)
+
+if [ -x "$out/qemu-system-xtensa" ] && [ -f "$out/rom.elf" ] && [ -f "$out/probe-narrow-flash.elf" ]; then
     echo "$out"
     exit 0
 fi
@@ -131,6 +134,17 @@ install_board_sources() {
     done
 }
 
+# The one change to QEMU's own code (emu/qemu-narrow-load.patch): the
+# board's LoadStoreError for 8- and 16-bit loads from IRAM and flash, which
+# the translator must check. Off for every other machine, so the shared
+# tree stays good for checkouts without it; applied once.
+patch_qemu() {
+    local f=$qemu_src/target/xtensa/translate.c
+    grep -q "the narrow-load check branches before the load" "$f" && return
+    say "patching target/xtensa/translate.c (emu/qemu-narrow-load.patch)"
+    patch -d "$qemu_src" -p1 -N -s <"$emu_dir/qemu-narrow-load.patch" >&2
+}
+
 build_qemu() {
     local build=$qemu_src/build
     if [ ! -f "$build/build.ninja" ]; then
@@ -148,25 +162,30 @@ build_qemu() {
 build_rom() { # out.elf
     xtensa-lx106-elf-gcc -Os -nostdlib -ffreestanding -fno-builtin -fno-tree-loop-distribute-patterns -Wall -Werror \
         -T "$emu_dir/rom/rom.ld" -Wl,--gc-sections -Wl,-Map="$1.map" \
-        -o "$1" "$emu_dir/rom/reset.S" "$emu_dir/rom/routines.c"
+        -o "$1" "$emu_dir/rom/reset.S" "$emu_dir/rom/boot.c" "$emu_dir/rom/routines.c"
     if xtensa-lx106-elf-nm -u "$1" | grep -q .; then
         say "rom.elf has undefined symbols:"; xtensa-lx106-elf-nm -u "$1" >&2; exit 1
     fi
 }
 
-# The watchdog test image (cargo fw-emu --self-test wraps it in a boot image).
-build_test_image() { # out.elf
-    xtensa-lx106-elf-gcc -nostdlib -T "$emu_dir/test/wdt_starve.ld" -o "$1" \
-        "$emu_dir/test/wdt_starve.S"
+# The test images (cargo fw-emu --self-test wraps each in a boot image).
+build_test_images() { # out-dir
+    local m
+    for m in "${probe_modes[@]}"; do
+        xtensa-lx106-elf-gcc -Os -nostdlib -ffreestanding -fno-builtin -Wall -Werror \
+            -DPROBE_$(echo "$m" | tr a-z- A-Z_) -T "$emu_dir/test/probe.ld" \
+            -o "$1/probe-$m.elf" "$emu_dir/test/probe.c"
+    done
 }
 
 install_missing_packages
 fetch_qemu_source
 install_board_sources
+patch_qemu
 build_qemu
 tmp=$(mktemp -d "$cache/emu-tmp.XXXXXX")
 build_rom "$tmp/rom.elf"
-build_test_image "$tmp/wdt-starve.elf"
+build_test_images "$tmp"
 cp "$qemu_src/build/qemu-system-xtensa" "$tmp/"
 rm -rf "$out"
 mv "$tmp" "$out"

@@ -52,6 +52,12 @@
  *   sim=PATH          the simulator's Unix socket (esp8266_link.h): the
  *                     I2C slaves on GPIO14/12, XSHUT on GPIO0/2, the servo
  *                     pins GPIO5/4 and UART0 wired to the simulated robot
+ *   flash-mode=M      the fastest read mode the flash chip answers (qio,
+ *                     qout, dio, dout; default dio, the NodeMCU's ESP-12E):
+ *                     a slower mode is answered too, a faster one is not
+ *   uart-baud=N       the rate the other end of UART0 listens at (default
+ *                     115200): bytes sent more than 3 % off it arrive as
+ *                     0xFF, as framing garbage does on a terminal
  *   profile=FILE      at stop-ms, the CPU's PC sampled every profile-ns
  *                     virtual ns (with sim=, from when the simulator says
  *                     the firmware's loop runs): "<pc> <a0> <samples>"
@@ -137,7 +143,12 @@ static uint64_t regfile_io_read(void *opaque, hwaddr addr, unsigned size)
 static void regfile_io_write(void *opaque, hwaddr addr, uint64_t v,
                              unsigned size)
 {
-    regfile_write(opaque, addr, v);
+    RegFile *f = opaque;
+
+    regfile_write(f, addr, v);
+    if (f->written) {
+        f->written(f->written_opaque);
+    }
 }
 
 /* Peripheral registers are 32-bit; narrower accesses are widened by QEMU. */
@@ -150,12 +161,15 @@ static const MemoryRegionOps regfile_ops = {
 
 /* ---- memory and images ---------------------------------------------------------- */
 
+/* RAM as at power-on: not zero (POWER_ON_PATTERN), so an image that
+ * counts on memory it did not zero sees the difference. */
 static void map_ram(const char *name, hwaddr base, uint64_t size)
 {
     MemoryRegion *mr = g_new(MemoryRegion, 1);
 
     memory_region_init_ram(mr, NULL, name, size, &error_fatal);
     memory_region_add_subregion(get_system_memory(), base, mr);
+    memset(memory_region_get_ram_ptr(mr), POWER_ON_PATTERN, size);
 }
 
 static void map_rom(const char *name, hwaddr base, uint64_t size)
@@ -184,7 +198,9 @@ static void map_regfile(Esp8266State *s, RegFile *f, const char *name,
 }
 
 /* The flash chip's contents, read through the cache window at 0x40200000
- * (the first MiB; the rest of the file is accepted and not mapped). */
+ * (the first MiB; the rest of the file is accepted and not mapped). The
+ * window is there only while the cache is on in a mode the flash answers
+ * (esp8266_clock.c); under it, flash_off_mr refuses the read. */
 static void load_flash(Esp8266State *s)
 {
     g_autofree gchar *data = NULL;
@@ -194,8 +210,13 @@ static void load_flash(Esp8266State *s)
 
     memory_region_init_rom(&s->flash_mr, OBJECT(s), "esp8266.flash",
                            FLASH_MAP_SIZE, &error_fatal);
-    memory_region_add_subregion(get_system_memory(), FLASH_MAP_BASE,
-                                &s->flash_mr);
+    memory_region_add_subregion_overlap(get_system_memory(), FLASH_MAP_BASE,
+                                        &s->flash_mr, 1);
+    memory_region_set_enabled(&s->flash_mr, false);
+    memory_region_init_io(&s->flash_off_mr, OBJECT(s), &flash_off_ops, s,
+                          "esp8266.flash-off", FLASH_MAP_SIZE);
+    memory_region_add_subregion_overlap(get_system_memory(), FLASH_MAP_BASE,
+                                        &s->flash_off_mr, 0);
     window = memory_region_get_ram_ptr(&s->flash_mr);
     memset(window, 0xff, FLASH_MAP_SIZE);   /* erased flash */
     if (!s->flash_path) {
@@ -264,13 +285,39 @@ void stop_expired(void *opaque)
 
 /* ---- the machine ------------------------------------------------------------------- */
 
-/* Power-on and every watchdog reset: the chip's peripherals to their reset
- * state, the CPU to the ROM's reset vector. RAM, RTC memory, the flash and
- * the host-side input feed are left as they are, as on the chip. */
+/* The boot mode from the strapping pins at the instant of the reset, before
+ * the pins are released: GPIO15 (pulled low on the NodeMCU), GPIO0, GPIO2
+ * as bits 2, 1, 0 (Espressif's boot messages: 3 boots from flash, 1 is UART
+ * download mode). A pin the firmware drives low when the reset comes
+ * counts as low. */
+static uint32_t latch_boot_mode(Esp8266State *s)
+{
+    uint32_t gpio0 = s->gpio_levels & 1, gpio2 = (s->gpio_levels >> 2) & 1;
+
+    return (gpio0 << 1) | gpio2;
+}
+
+/* Power-on and every watchdog reset: the boot mode latched, the clock back
+ * to the crystal's, the chip's peripherals to their reset state (the flash
+ * cache off), the CPU to the ROM's reset vector. RAM, RTC memory, the flash
+ * and the host-side input feed are left as they are, as on the chip. */
 void esp8266_reset(void *opaque)
 {
     Esp8266State *s = opaque;
 
+    s->boot_mode = latch_boot_mode(s);
+    s->rtc.regs[RTC_RESET_CAUSE / 4] = s->reset_cause;
+    log_event(s, "reset cause %u boot-mode %u", s->reset_cause, s->boot_mode);
+    if (s->boot_mode == BOOT_MODE_UART) {
+        log_event(s, "download-mode");
+        error_report("esp8266: reset with GPIO0 low: the ROM enters UART "
+                     "download mode (boot mode 1) and runs nothing");
+    } else if (s->boot_mode != BOOT_MODE_FLASH) {
+        error_report("esp8266: reset with boot mode %u (GPIO0, GPIO2 = %u, "
+                     "%u): not a flash boot, nothing runs", s->boot_mode,
+                     (s->boot_mode >> 1) & 1, s->boot_mode & 1);
+    }
+    clock_reset(s);
     xtensa_select_static_vectors(&s->cpu->env, 1);  /* 0x40000080 */
     cpu_reset(CPU(s->cpu));
     uart_reset(s);
@@ -278,6 +325,9 @@ void esp8266_reset(void *opaque)
     frc1_reset(s);
     wdt_reset(s);
     memset(s->dport.regs, 0, s->dport.size);
+    memset(s->spi0.regs, 0, s->spi0.size);
+    s->flash_off_logged = false;
+    flash_update_map(s);
 }
 
 static void map_peripherals(Esp8266State *s)
@@ -289,11 +339,20 @@ static void map_peripherals(Esp8266State *s)
                           "esp8266.periph", PERIPH_SIZE);
     memory_region_add_subregion(get_system_memory(), PERIPH_BASE, catch_all);
 
+    /* DPORT SPI_CACHE and SPI0 CTRL decide whether the flash is readable */
     map_regfile(s, &s->dport, "esp8266.dport", DPORT_BASE, DPORT_SIZE, false);
+    s->dport.written = flash_update_map;
+    s->dport.written_opaque = s;
     map_regfile(s, &s->io_mux, "esp8266.io_mux", PERIPH_BASE + IO_MUX_OFFSET,
                 0x100, false);
-    map_regfile(s, &s->rtc_cntl, "esp8266.rtc_cntl",
-                PERIPH_BASE + RTC_CNTL_OFFSET, 0x100, false);
+    regfile_init(&s->rtc_cntl, "esp8266.rtc_cntl",
+                 PERIPH_BASE + RTC_CNTL_OFFSET, 0x100, false);
+    map_io(s, &s->rtc_cntl_mr, &rtc_cntl_ops, s, "esp8266.rtc_cntl",
+           PERIPH_BASE + RTC_CNTL_OFFSET, 0x100);
+    map_regfile(s, &s->spi0, "esp8266.spi0", PERIPH_BASE + SPI0_OFFSET, 0x100,
+                false);
+    s->spi0.written = flash_update_map;
+    s->spi0.written_opaque = s;
     regfile_init(&s->rtc, "esp8266.rtc", PERIPH_BASE + RTC_OFFSET, 0x100, false);
 
     map_io(s, &s->uart_mr, &uart_ops, s, "esp8266.uart0",
@@ -313,9 +372,21 @@ static void esp8266_init(MachineState *machine)
     Esp8266State *s = ESP8266_MACHINE(machine);
     Clock *clk = clock_new(OBJECT(machine), "cpu-refclk");
 
-    clock_set_hz(clk, CPU_HZ);
+    if (!parse_flash_mode(s->flash_mode_name, &s->flash_best)) {
+        error_report("esp8266: flash-mode=%s: one of qio, qout, dio, dout",
+                     s->flash_mode_name);
+        exit(1);
+    }
+    s->cpu_clk = clk;
+    s->cpu_hz = CPU_HZ_RESET;
+    s->reset_cause = RST_CAUSE_POWER_ON;
+    clock_set_hz(clk, CPU_HZ_RESET);
     s->cpu = xtensa_cpu_create_with_clock(machine->cpu_type, clk);
 
+    /* IRAM, the cache's RAM after it and the flash window: the instruction
+     * bus, which takes 32-bit loads only (LoadStoreError otherwise) */
+    xtensa_narrow_load_error_base = IRAM_BASE;
+    xtensa_narrow_load_error_size = FLASH_MAP_BASE + FLASH_MAP_SIZE - IRAM_BASE;
     map_ram("esp8266.dram", DRAM_BASE, DRAM_SIZE);
     map_ram("esp8266.iram", IRAM_BASE, IRAM_SIZE);
     map_ram("esp8266.rtc_mem", RTC_MEM_BASE, RTC_MEM_SIZE);
@@ -328,6 +399,7 @@ static void esp8266_init(MachineState *machine)
     s->frc1_timer = timer_new_ns(QEMU_CLOCK_VIRTUAL, frc1_expired, s);
     s->wdt_timer = timer_new_ns(QEMU_CLOCK_VIRTUAL, wdt_expired, s);
     s->frc1_irq = s->cpu->env.irq_inputs[FRC1_CPU_IRQ];
+    s->uart_irq = s->cpu->env.irq_inputs[UART_CPU_IRQ];
 
     if (serial_hd(0)) {
         qemu_chr_fe_init(&s->chr, serial_hd(0), &error_abort);
@@ -379,6 +451,7 @@ STRING_OPTION(input_path)
 STRING_OPTION(input_after)
 STRING_OPTION(sim_path)
 STRING_OPTION(profile_path)
+STRING_OPTION(flash_mode_name)
 
 /* uint32 options: `opaque` is the field's offset in Esp8266State. */
 static void visit_u32_option(Object *obj, Visitor *v, const char *name,
@@ -399,6 +472,8 @@ static void add_u32_option(ObjectClass *oc, const char *name, size_t offset,
 static void esp8266_instance_init(Object *obj)
 {
     ESP8266_MACHINE(obj)->input_gap_ms = 100;
+    ESP8266_MACHINE(obj)->flash_mode_name = g_strdup("dio");
+    ESP8266_MACHINE(obj)->uart_baud = 115200;
     ESP8266_MACHINE(obj)->profile_ns = 10007;
     ESP8266_MACHINE(obj)->link_valid_until = INT64_MAX;
 }
@@ -444,6 +519,12 @@ static void esp8266_class_init(ObjectClass *oc, void *data)
         "virtual ns between PC samples (default 10007)");
     add_u32_option(oc, "stop-ms", offsetof(Esp8266State, stop_ms),
         "quit after this many virtual ms (0: run until stopped)");
+    add_string_option(oc, "flash-mode", get_flash_mode_name,
+                      set_flash_mode_name,
+                      "the fastest read mode the flash chip answers: qio, "
+                      "qout, dio (default), dout");
+    add_u32_option(oc, "uart-baud", offsetof(Esp8266State, uart_baud),
+        "the baud rate the other end of UART0 listens at (default 115200)");
 }
 
 static const TypeInfo esp8266_info = {

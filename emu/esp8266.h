@@ -23,8 +23,12 @@
 #define TYPE_ESP8266_MACHINE MACHINE_TYPE_NAME("esp8266")
 OBJECT_DECLARE_SIMPLE_TYPE(Esp8266State, ESP8266_MACHINE)
 
-/* The clock the HAL sets up; CCOUNT, FRC1 and the UART run from it. */
-#define CPU_HZ            80000000ULL
+/* The CPU clock: 52 MHz from the 26 MHz crystal at power-on and after
+ * every reset, until the firmware's PLL write (esp8266-hal's, for a 26 MHz
+ * crystal) makes it 80 MHz. CCOUNT, FRC1, the UART and the watchdog run
+ * from it (esp8266_clock.c). */
+#define CPU_HZ_RESET      52000000u
+#define CPU_HZ_PLL        80000000u
 
 /* Memory map (TRM, memory map). */
 #define DRAM_BASE         0x3ffe8000u
@@ -42,9 +46,12 @@ OBJECT_DECLARE_SIMPLE_TYPE(Esp8266State, ESP8266_MACHINE)
 #define PERIPH_SIZE       0x1000u
 #define RTC_MEM_BASE      0x60001000u
 #define RTC_MEM_SIZE      (1 * KiB)
+/* What RAM and RTC memory hold at power-on: not zero (esp8266_init). */
+#define POWER_ON_PATTERN  0xa5
 
 /* Peripheral blocks, offsets from PERIPH_BASE (TRM / PAC). */
 #define UART0_OFFSET      0x000
+#define SPI0_OFFSET       0x200
 #define GPIO_OFFSET       0x300
 #define FRC1_OFFSET       0x600
 #define RTC_OFFSET        0x700
@@ -54,9 +61,34 @@ OBJECT_DECLARE_SIMPLE_TYPE(Esp8266State, ESP8266_MACHINE)
 
 /* CPU interrupt of FRC1 (core-isa.h: interrupt 9 is external, edge). */
 #define FRC1_CPU_IRQ      9
+/* CPU interrupt of UART0 (core-isa.h: interrupt 5 is external, level;
+ * esp8266-hal InterruptType::UART). */
+#define UART_CPU_IRQ      5
 /* DPORT EDGE_INT_ENABLE: bit 1 lets FRC1's edge interrupt through. */
 #define DPORT_EDGE_INT_ENABLE   0x04
 #define EDGE_INT_FRC1           (1u << 1)
+/* DPORT SPI_CACHE (PAC: "Controls SPI memory-mapped caching"): bit 8
+ * enables the flash cache, through which 0x40200000.. is read. */
+#define DPORT_SPI_CACHE         0x0c
+#define SPI_CACHE_ENABLE        (1u << 8)
+
+/* The boot modes the ROM prints, from the strapping pins latched at reset
+ * (GPIO15, GPIO0, GPIO2 as bits 2, 1, 0; GPIO_IN bits 16..18 here). */
+#define BOOT_MODE_UART          1
+#define BOOT_MODE_FLASH         3
+/* Reset causes the ROM prints ("rst cause:N"): Espressif's ESP8266 boot
+ * messages: 1 power on, 2 external reset, 4 hardware watchdog. */
+#define RST_CAUSE_POWER_ON      1
+#define RST_CAUSE_WATCHDOG      4
+/* Where the ROM reads them: RTC block 0x60000714 (the board's choice). */
+#define RTC_RESET_CAUSE         0x14
+
+/* SPI flash read modes (SPI0 CTRL's read-mode bits; esptool's header
+ * byte 2: 0 QIO, 1 QOUT, 2 DIO, 3 DOUT). SLOW: none of the bits set, the
+ * single-line read every flash answers. */
+typedef enum FlashMode {
+    FLASH_QIO, FLASH_QOUT, FLASH_DIO, FLASH_DOUT, FLASH_SLOW,
+} FlashMode;
 
 #define NUM_GPIO          16      /* GPIO0..15; GPIO16 is the RTC's */
 #define UART_FIFO_LEN     128
@@ -71,6 +103,8 @@ typedef struct RegFile {
     bool log_unimp;         /* log each register's first read and write */
     uint32_t *regs;
     uint8_t *logged;        /* bit 0: read logged, bit 1: write logged */
+    void (*written)(void *opaque);  /* after each write, when set */
+    void *written_opaque;
 } RegFile;
 
 typedef struct Fifo {
@@ -82,22 +116,34 @@ struct Esp8266State {
     MachineState parent;
 
     XtensaCPU *cpu;
+    Clock *cpu_clk;
+    uint32_t cpu_hz;            /* CPU_HZ_RESET until the PLL write */
+    uint32_t pll_writes;        /* bit 0: address 1, bit 1: address 2 written for 26 MHz */
+    uint32_t reset_cause;       /* the cause of the next (or last) reset */
+    uint32_t boot_mode;         /* latched from the strapping pins at reset */
     char *rom_path, *flash_path, *events_path;
+    char *flash_mode_name;      /* flash-mode=: the best mode the flash chip answers */
+    FlashMode flash_best;
+    uint32_t uart_baud;         /* uart-baud=: the rate the other end listens at */
+    uint32_t uart_tx_baud;      /* the rate of the last byte sent, for the log */
     char *input_path, *input_after;
     uint32_t input_gap_ms, stop_ms;
     FILE *events;
     QEMUTimer *stop_timer;
     bool stopped;               /* past stop-ms: nothing more leaves the board */
 
-    MemoryRegion flash_mr, dport_mr, periph_mr, uart_mr, gpio_mr, rtc_mr,
-                 frc1_mr, wdt_mr;
-    RegFile dport, periph, rtc, io_mux, rtc_cntl;
+    MemoryRegion flash_mr, flash_off_mr, dport_mr, periph_mr, uart_mr, gpio_mr,
+                 rtc_mr, frc1_mr, wdt_mr, rtc_cntl_mr;
+    RegFile dport, periph, rtc, io_mux, rtc_cntl, spi0;
+    bool flash_readable;        /* the cache on, in a mode the flash answers */
+    bool flash_off_logged;
 
     /* UART0 */
     CharBackend chr;
     Fifo tx, rx;
     uint32_t uart_int_raw, uart_int_ena, uart_clkdiv, uart_conf0, uart_conf1;
     QEMUTimer *tx_timer;
+    qemu_irq uart_irq;
     /* deterministic input (uart-input) */
     uint8_t *input;
     size_t input_len, input_pos;
@@ -146,10 +192,15 @@ static inline int64_t now_ns(void)
     return qemu_clock_get_ns(QEMU_CLOCK_VIRTUAL);
 }
 
-static inline int64_t cycles_to_ns(uint64_t cycles)
+/* Cycles of the CPU clock (which also clocks the peripherals) in ns. */
+static inline int64_t cycles_to_ns(Esp8266State *s, uint64_t cycles)
 {
-    return muldiv64(cycles, NANOSECONDS_PER_SECOND, CPU_HZ);
+    return muldiv64(cycles, NANOSECONDS_PER_SECOND, s->cpu_hz);
 }
+
+/* target/xtensa/translate.c, as emu/qemu-narrow-load.patch changes it: an
+ * 8- or 16-bit load from [base, base + size) raises LoadStoreError. */
+extern uint32_t xtensa_narrow_load_error_base, xtensa_narrow_load_error_size;
 
 /* esp8266.c: the machine */
 void log_event(Esp8266State *s, const char *fmt, ...) G_GNUC_PRINTF(2, 3);
@@ -157,6 +208,12 @@ uint32_t regfile_read(RegFile *f, hwaddr addr);
 void regfile_write(RegFile *f, hwaddr addr, uint32_t v);
 void esp8266_reset(void *opaque);
 void stop_expired(void *opaque);
+
+/* esp8266_clock.c: the CPU clock, the PLL, the flash cache and SPI0 */
+extern const MemoryRegionOps rtc_cntl_ops, flash_off_ops;
+void clock_reset(Esp8266State *s);
+void flash_update_map(void *opaque);
+bool parse_flash_mode(const char *name, FlashMode *mode);
 
 /* esp8266_uart.c: UART0 */
 extern const MemoryRegionOps uart_ops;

@@ -91,9 +91,9 @@ static uint64_t gpio_read(void *opaque, hwaddr addr, unsigned size)
         return s->gpio_out;
     case GPIO_ENABLE:
         return s->gpio_enable;
-    case GPIO_IN:   /* bits 16..31: strapping, read as 0 */
+    case GPIO_IN:   /* bits 16..18: the boot mode latched at reset */
         link_refresh(s);
-        return s->gpio_levels & GPIO_MASK;
+        return (s->gpio_levels & GPIO_MASK) | (s->boot_mode << 16);
     case GPIO_OUT_W1TS:
     case GPIO_OUT_W1TC:
     case GPIO_ENABLE_W1TS:

@@ -30,7 +30,7 @@ static unsigned frc1_prescaler(Esp8266State *s)
 
 static int64_t frc1_ticks_to_ns(Esp8266State *s, uint64_t ticks)
 {
-    return cycles_to_ns(ticks * frc1_prescaler(s));
+    return cycles_to_ns(s, ticks * frc1_prescaler(s));
 }
 
 static uint32_t frc1_count(Esp8266State *s)
@@ -40,7 +40,7 @@ static uint32_t frc1_count(Esp8266State *s)
     if (!(s->frc1_ctrl & FRC1_CTRL_ENABLE)) {
         return s->frc1_count_at_start;
     }
-    ticks = muldiv64(now_ns() - s->frc1_start_ns, CPU_HZ,
+    ticks = muldiv64(now_ns() - s->frc1_start_ns, s->cpu_hz,
                      NANOSECONDS_PER_SECOND) / frc1_prescaler(s);
     return (s->frc1_count_at_start - (uint32_t)ticks) & FRC1_COUNT_MASK;
 }

@@ -2,7 +2,8 @@
  * esp8266_uart: UART0 (0x60000000) of the paperbot ESP8266 board.
  *
  * From the ESP8266 Technical Reference (TRM), UART registers: the 128-byte
- * TX and RX FIFOs, INT_RAW/ST/ENA/CLR (RXFIFO_FULL, TXFIFO_EMPTY, overflow),
+ * TX and RX FIFOs, INT_RAW/ST/ENA/CLR (RXFIFO_FULL, TXFIFO_EMPTY, overflow;
+ * CPU interrupt 5 while one enabled is raised),
  * CLKDIV, STATUS, CONF0/1; bytes leave and arrive at the baud rate of CLKDIV
  * and CONF0's frame. Also the board's deterministic input (uart-input=FILE):
  * a line at a time, input-gap-ms apart, once UART0 TX has sent the text
@@ -14,6 +15,7 @@
 #include "qemu/osdep.h"
 #include "qemu/log.h"
 #include "qemu/error-report.h"
+#include "hw/irq.h"
 #include "esp8266.h"
 
 enum {
@@ -28,7 +30,11 @@ enum {
 #define UART_STATUS_TXD         (1u << 31)
 #define UART_CONF0_RESET        0x1c            /* 8 data bits, 1 stop bit */
 #define UART_CONF1_RESET        0x6060          /* rx full 96, tx empty 96 */
-#define UART_CLKDIV_RESET       (CPU_HZ / 115200)
+#define UART_CLKDIV_RESET       (CPU_HZ_PLL / 115200)
+/* How far off the listener's rate a byte may be and still be read, and
+ * what it reads otherwise (a frame sampled at the wrong rate). */
+#define UART_BAUD_TOLERANCE_PCT 3
+#define UART_GARBLED            0xff
 
 bool fifo_push(Fifo *f, uint8_t b)
 {
@@ -62,11 +68,12 @@ int64_t uart_frame_ns(Esp8266State *s)
     uint64_t half_bits = 2 * (1 + data_bits + parity) + stop_half_bits;
     uint32_t div = s->uart_clkdiv & 0xfffff;
 
-    return cycles_to_ns(half_bits * MAX(div, 1u) / 2);
+    return cycles_to_ns(s, half_bits * MAX(div, 1u) / 2);
 }
 
 /* RXFIFO_FULL and TXFIFO_EMPTY follow the fill levels against CONF1's
- * thresholds; they are levels, not latched. */
+ * thresholds; they are levels, not latched. UART0's CPU interrupt (5, a
+ * level one) is raised while INT_RAW & INT_ENA is not zero. */
 static void uart_update_levels(Esp8266State *s)
 {
     unsigned rx_full = s->uart_conf1 & 0x7f;
@@ -79,6 +86,7 @@ static void uart_update_levels(Esp8266State *s)
     if (s->tx.count < tx_empty) {
         s->uart_int_raw |= UART_INT_TXFIFO_EMPTY;
     }
+    qemu_set_irq(s->uart_irq, (s->uart_int_raw & s->uart_int_ena) != 0);
 }
 
 void uart_receive_byte(Esp8266State *s, uint8_t b)
@@ -135,11 +143,29 @@ void input_tick(void *opaque)
                                 : uart_frame_ns(s));
 }
 
+/* The byte as the other end, listening at uart-baud, reads it: the rate is
+ * the CPU clock over CLKDIV (52 MHz before the PLL write, so the ROM's
+ * divider for 115200 at 80 MHz gives 74880 baud). A change of rate is
+ * logged ("uart0-baud N"). */
+static uint8_t uart_as_heard(Esp8266State *s, uint8_t b)
+{
+    uint32_t baud = s->cpu_hz / MAX(s->uart_clkdiv & 0xfffff, 1u);
+    uint64_t off = baud > s->uart_baud ? baud - s->uart_baud
+                                       : s->uart_baud - baud;
+
+    if (baud != s->uart_tx_baud) {
+        s->uart_tx_baud = baud;
+        log_event(s, "uart0-baud %u", baud);
+    }
+    return off * 100 <= (uint64_t)s->uart_baud * UART_BAUD_TOLERANCE_PCT
+           ? b : UART_GARBLED;
+}
+
 /* The byte at the head of the TX FIFO has been shifted out. */
 void uart_tx_done(void *opaque)
 {
     Esp8266State *s = opaque;
-    uint8_t b = fifo_pop(&s->tx);
+    uint8_t b = uart_as_heard(s, fifo_pop(&s->tx));
 
     if (!s->stopped) {
         qemu_chr_fe_write_all(&s->chr, &b, 1);
@@ -208,6 +234,7 @@ static void uart_write(void *opaque, hwaddr addr, uint64_t v, unsigned size)
         break;
     case UART_INT_ENA:
         s->uart_int_ena = v;
+        uart_update_levels(s);
         break;
     case UART_INT_CLR:
         s->uart_int_raw &= ~v;

@@ -23,17 +23,17 @@ enum {
 #define WDT_FEED_MAGIC          0x73
 
 /* Stage n lasts 2^(n + 16) cycles: 0.84 s for n = 10 (esp8266-hal). */
-static int64_t wdt_stage_ns(uint32_t n)
+static int64_t wdt_stage_ns(Esp8266State *s, uint32_t n)
 {
     n = MIN(MAX(n & 0xf, 1u), 15u);
-    return cycles_to_ns(1ULL << (n + 16));
+    return cycles_to_ns(s, 1ULL << (n + 16));
 }
 
 static void wdt_start_stage(Esp8266State *s, unsigned stage)
 {
     s->wdt_stage = stage;
     timer_mod(s->wdt_timer, now_ns() +
-              wdt_stage_ns(stage == 0 ? s->wdt_op : s->wdt_op_nd));
+              wdt_stage_ns(s, stage == 0 ? s->wdt_op : s->wdt_op_nd));
 }
 
 /* The chip resets at the CPU's next instruction boundary: the reset runs as
@@ -41,7 +41,10 @@ static void wdt_start_stage(Esp8266State *s, unsigned stage)
  * loop, which under -icount sleep=off runs late in virtual time.) */
 static void wdt_reset_chip(CPUState *cpu, run_on_cpu_data data)
 {
-    esp8266_reset(data.host_ptr);
+    Esp8266State *s = data.host_ptr;
+
+    s->reset_cause = RST_CAUSE_WATCHDOG;
+    esp8266_reset(s);
 }
 
 void wdt_expired(void *opaque)

@@ -19,7 +19,8 @@
 # them informational: they still print FAILED, but only a failing test fails
 # the run.
 #
-# Needs: rustup nightly with rust-src, stable (host generator), apt packages
+# Needs: rustup's dated nightly named in xtensa/nightly, with rust-src (the
+# link wrapper xtensa/xt-link.sh is written for its output), stable (host generator), apt packages
 # qemu-system-misc gcc-xtensa-lx106 binutils-xtensa-lx106
 # picolibc-xtensa-lx106-elf xz-utils; python3 for the breakdowns of steps 5
 # and 7 (skipped without it).
@@ -54,13 +55,14 @@ echo "== 1. test vectors: lx106/src/vectors.rs from the f64 generator (lx106/vec
 (cd "$root" && cargo run -q --manifest-path lx106/vectors/Cargo.toml --target-dir lx106/target/vectors -- --check) ||
   { echo "run.sh: FAILED: stale test vectors" >&2; exit 1; }
 
+nightly=$(cat "$root/xtensa/nightly")
 cd "$here"
 echo "== 2. GCC libgcc Xtensa sources (./fetch-libgcc-src.sh; build.rs runs it too)"
 LIBGCC_SRC=$(./fetch-libgcc-src.sh) || exit 2
 echo "   $LIBGCC_SRC: $(sed -n 's/^from: //p' "$LIBGCC_SRC/SOURCE")"
 
-echo "== 3. build (cargo +nightly build --release)"
-cargo +nightly build --release 2>&1 | grep -vE '^warning: profile package spec `compiler_builtins`' | tail -3
+echo "== 3. build (cargo +$nightly build --release)"
+cargo "+$nightly" build --release 2>&1 | grep -vE '^warning: profile package spec `compiler_builtins`' | tail -3
 OUT=target/xtensa-esp8266-none-elf/release
 ELF=$OUT/paperbot-lx106
 xtensa-lx106-elf-size "$ELF" "$OUT/size-probe" "$OUT/size-base" "$OUT/tick-profile"

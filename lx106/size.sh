@@ -30,7 +30,7 @@ while (($#)); do
 done
 OUT=target/xtensa-esp8266-none-elf/release
 if ((build)); then
-  cargo +nightly build --release --bin core-probe --bin size-probe --bin size-base 2>&1 |
+  cargo "+$(cat ../xtensa/nightly)" build --release --bin core-probe --bin size-probe --bin size-base 2>&1 |
     grep -vE '^warning: profile package spec `compiler_builtins`' | tail -1
 fi
 

@@ -1,43 +1,43 @@
 /*
  * The board's mask ROM, part 1: exception vectors, the reset path and the
- * entries of the ROM routines (their bodies are in routines.c).
+ * entries of the ROM routines (their bodies are in routines.c; the boot
+ * itself, in C, in boot.c).
  *
- * Reset (ESP8266 boot from SPI flash, as Espressif's ROM loader does it):
- * the boot image at flash offset 0, mapped at 0x40200000, is read as the
- * esptool "version 1" image: an 8-byte header (magic 0xE9, segment count,
- * flash mode, flash size/frequency, entry address), then each segment as
- * load address, length, data; then zero padding up to the last byte of a
- * 16-byte block, which holds the checksum (0xEF XOR every data byte). Each
- * segment is copied to its address, the checksum is checked, and the entry
- * is called with the stack the ROM leaves (SP = 0x3FFFFFF0) and PS.UM set,
- * interrupts at level 0 and all of them disabled (INTENABLE = 0).
+ * Reset: SP = 0x3FFFFFF0 (the stack the ROM leaves the image), rom_boot()
+ * loads the boot image and returns its entry, which is called as the
+ * chip's ROM hands over: interrupts masked, PS = UM | EXCM | INTLEVEL 15,
+ * and INTENABLE holding bits the image does not own (SLC, UART, watchdog:
+ * ESP8266 interrupts 0, 5, 8), UART0's among them live (rom_boot leaves
+ * its TX-FIFO-empty interrupt enabled). An image must set PS and
+ * INTENABLE itself: one that keeps PS never takes an interrupt, one that
+ * keeps INTENABLE takes UART0's, which it has no handler for, for ever.
+ *
+ * An exception or interrupt at the ROM's vectors (before the image moves
+ * VECBASE) is reported by rom_exception() with EXCCAUSE, EPC1 and EXCVADDR.
  *
  * QEMU's lx106 (target/xtensa/core-lx106/core-isa.h) has VECBASE reset
  * 0x40000000 and the second static reset vector at 0x40000080, which the
  * board selects: the ESP8266's own reset vector in its ROM.
  */
-    .equ FLASH_MAPPED,   0x40200000   /* flash offset 0 through the cache */
-    .equ UART0_FIFO,     0x60000000
-    .equ ROM_STACK,      0x3ffffff0
-    .equ IMAGE_MAGIC,    0xe9
-    .equ CHECKSUM_SEED,  0xef
-    .equ PS_UM,          0x20
+    .equ ROM_STACK,        0x3ffffff0
+    .equ HANDOVER_PS,      0x3f         /* UM | EXCM | INTLEVEL 15 */
+    .equ HANDOVER_INTENABLE, 0x121      /* SLC, UART, WDT: not the image's */
 
 /* ---- vectors (offsets from VECBASE, core-isa.h) ------------------------- */
     .section .vectors, "ax"
     .global rom_vectors
 rom_vectors:
-    j       rom_unexpected
+    j       rom_vec_other
     .org    0x10                    /* debug (= level 2) */
-    j       rom_unexpected
+    j       rom_vec_debug
     .org    0x20                    /* NMI (level 3) */
-    j       rom_unexpected
+    j       rom_vec_other
     .org    0x30                    /* kernel exception */
-    j       rom_unexpected
+    j       rom_vec_kernel
     .org    0x50                    /* user exception */
-    j       rom_unexpected
+    j       rom_vec_user
     .org    0x70                    /* double exception */
-    j       rom_unexpected
+    j       rom_vec_double
     .org    0x80                    /* reset vector 1 */
     .global rom_reset_vector
 rom_reset_vector:
@@ -45,96 +45,57 @@ rom_reset_vector:
 
 /* ---- reset --------------------------------------------------------------- */
     .section .text.rom_reset, "ax"
-    .literal .Lflash, FLASH_MAPPED
     .literal .Lstack, ROM_STACK
-    .literal .Lmsg_magic, msg_magic
-    .literal .Lmsg_length, msg_length
-    .literal .Lmsg_checksum, msg_checksum
+    .literal .Lintenable, HANDOVER_INTENABLE
     .align  4
     .global rom_reset
 rom_reset:
-    movi    a0, 0
-    wsr     a0, intenable
-    l32r    a2, .Lflash             /* a2: read pointer in the image */
-    l8ui    a3, a2, 0
-    movi    a4, IMAGE_MAGIC
-    bne     a3, a4, .Lbad_magic
-    l8ui    a5, a2, 1               /* a5: segments left */
-    l32i    a6, a2, 4               /* a6: entry */
-    addi    a2, a2, 8
-    movi    a7, 0                   /* a7: XOR of every data word */
-.Lsegment:
-    beqz    a5, .Lsegments_done
-    l32i    a8, a2, 0               /* a8: load address */
-    l32i    a9, a2, 4               /* a9: bytes left */
-    addi    a2, a2, 8
-    extui   a10, a9, 0, 2           /* esptool pads segments to words */
-    bnez    a10, .Lbad_length
-.Lword:
-    beqz    a9, .Lsegment_done
-    l32i    a10, a2, 0
-    s32i    a10, a8, 0
-    xor     a7, a7, a10
-    addi    a2, a2, 4
-    addi    a8, a8, 4
-    addi    a9, a9, -4
-    j       .Lword
-.Lsegment_done:
-    addi    a5, a5, -1
-    j       .Lsegment
-.Lsegments_done:
-    srli    a10, a7, 16             /* fold the word XOR into a byte */
-    xor     a7, a7, a10
-    srli    a10, a7, 8
-    xor     a7, a7, a10
-    extui   a7, a7, 0, 8
-    movi    a10, CHECKSUM_SEED
-    xor     a7, a7, a10
-    movi    a10, 15                 /* checksum: last byte of the 16-byte block */
-    or      a2, a2, a10
-    l8ui    a10, a2, 0
-    bne     a7, a10, .Lbad_checksum
     l32r    a1, .Lstack
-    movi    a0, PS_UM
-    wsr     a0, ps
+    call0   rom_boot                /* a2: the entry */
+    l32r    a3, .Lintenable
+    wsr     a3, intenable
+    movi    a3, HANDOVER_PS
+    wsr     a3, ps
     rsync
     movi    a0, 0                   /* the entry never returns */
-    jx      a6
+    jx      a2
 
-.Lbad_magic:
-    l32r    a2, .Lmsg_magic
-    j       rom_fail
-.Lbad_length:
-    l32r    a2, .Lmsg_length
-    j       rom_fail
-.Lbad_checksum:
-    l32r    a2, .Lmsg_checksum
-    j       rom_fail
-
-/* ---- failure: a line on UART0, then wait for a reset --------------------- */
-    .section .text.rom_fail, "ax"
-    .literal .Luart, UART0_FIFO
-    .literal .Lmsg_unexpected, msg_unexpected
+/* ---- exceptions at the ROM's vectors: reported, then wait for a reset ---- */
+    .section .text.rom_vec, "ax"
+    .literal .Lvec_stack, ROM_STACK
+    .literal .Lname_user, name_user
+    .literal .Lname_kernel, name_kernel
+    .literal .Lname_double, name_double
+    .literal .Lname_debug, name_debug
+    .literal .Lname_other, name_other
     .align  4
-    .global rom_unexpected
-rom_unexpected:
-    l32r    a2, .Lmsg_unexpected
-    .global rom_fail
-rom_fail:                           /* a2: NUL-terminated message */
-    l32r    a3, .Luart
-1:  l8ui    a4, a2, 0
-    beqz    a4, 2f
-    s32i    a4, a3, 0
-    addi    a2, a2, 1
-    j       1b
-2:  waiti   15
-    j       2b
+rom_vec_user:
+    l32r    a2, .Lname_user
+    j       rom_vec_single
+rom_vec_kernel:
+    l32r    a2, .Lname_kernel
+    j       rom_vec_single
+rom_vec_double:
+    l32r    a2, .Lname_double
+    movi    a3, 1                   /* the PC is in DEPC */
+    j       rom_vec_report
+rom_vec_debug:
+    l32r    a2, .Lname_debug
+    j       rom_vec_single
+rom_vec_other:
+    l32r    a2, .Lname_other
+rom_vec_single:
+    movi    a3, 0
+rom_vec_report:
+    l32r    a1, .Lvec_stack
+    call0   rom_exception           /* never returns */
 
-    .section .rodata.rom_messages, "a"
-msg_magic:      .asciz "\r\nrom: no boot image at flash offset 0 (magic is not 0xE9)\r\n"
-msg_length:     .asciz "\r\nrom: boot image segment length is not a multiple of 4\r\n"
-msg_checksum:   .asciz "\r\nrom: boot image checksum mismatch\r\n"
-msg_unexpected: .asciz "\r\nrom: exception or interrupt at the ROM's vectors\r\n"
+    .section .rodata.rom_vector_names, "a"
+name_user:      .asciz "user"
+name_kernel:    .asciz "kernel"
+name_double:    .asciz "double"
+name_debug:     .asciz "debug"
+name_other:     .asciz "NMI or other"
 
 /* ---- ROM routine entries, at the addresses of rom-functions.x ------------ */
     .macro  rom_entry name, body

@@ -43,7 +43,7 @@ mod robot {
     use esp8266_hal::uart::UART0Serial;
 
     use paperbot::board::bitbang_i2c::CycleClock as _;
-    use paperbot::board::esp8266::{halt, start_watchdog, Board, Ccount, I2cBus, MicrosClock};
+    use paperbot::board::esp8266::{halt, start_watchdog, take_over_interrupts, Board, Ccount, I2cBus, MicrosClock};
     use paperbot::board::rtc_store::RtcMissionStore;
     use paperbot::config;
     use paperbot::control::log::RingLog;
@@ -77,6 +77,7 @@ mod robot {
 
     #[entry]
     fn main() -> ! {
+        take_over_interrupts();
         let Some(board) = Board::take() else {
             // Only reachable if main ran twice: stop and reset.
             halt(format_args!("peripherals already taken"));
@@ -87,9 +88,14 @@ mod robot {
     /// All hardware is created by [`Board::take`] and handed over here.
     fn run(b: Board) -> ! {
         let Board { mut i2c, servo_timer, mut serial, mut watchdog, mut led, front_xshut, right_xshut, delay } = b;
-        let _ = writeln!(serial, "\r\npaperbot {} up", env!("CARGO_PKG_VERSION"));
+        // Every line on UART0 ends in CR LF.
+        let _ = write!(serial, "\r\npaperbot {} up\r\n", env!("CARGO_PKG_VERSION"));
+        if !servo_timer.running() {
+            // pulses stopped, both pins low; the robot still answers
+            let _ = write!(serial, "# fault: servo timer interrupt not running\r\n");
+        }
         if let Err(e) = i2c.init() {
-            let _ = writeln!(serial, "!i2c bus stuck: {:?}", e);
+            let _ = write!(serial, "!i2c bus stuck: {:?}\r\n", e);
         }
 
         // One bit-banged bus, shared by the three chips from the main loop only.
@@ -99,7 +105,7 @@ mod robot {
         let up = bring_up(&mut front, &mut right);
         let mut compass = Compass::with_config(SharedI2c::new(&bus), delay);
         let compass_up = compass.reinit();
-        let _ = writeln!(serial, "lidars {:?} {:?}, compass {:?}", up.front, up.right, compass_up);
+        let _ = write!(serial, "lidars {:?} {:?}, compass {:?}\r\n", up.front, up.right, compass_up);
 
         let servos = ServoPair::with_config(servo_timer.output());
         // SAFETY: `run` is entered once (main never returns): the only reference to LOG
@@ -109,7 +115,7 @@ mod robot {
         // a mission uploaded before a reset (RTC memory; not after power-off)
         let mut store = RtcMissionStore;
         if let Some(mission) = Mission::decode(&store.load()) {
-            let _ = writeln!(serial, "mission of {} steps kept from before the reset", mission.len());
+            let _ = write!(serial, "mission of {} steps kept from before the reset\r\n", mission.len());
             ctl.set_mission(mission);
         }
 

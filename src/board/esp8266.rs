@@ -11,12 +11,16 @@
 //!   (esp8266-hal has no baud API); frame format is the ROM's 8N1.
 //! - Watchdog: the hardware WDT, [`config::board::WATCHDOG_MS`].
 //! - LED on GPIO16 (active low on the NodeMCU), XSHUT on GPIO0 / GPIO2.
+//! - [`take_over_interrupts`]: PS and INTENABLE set by the firmware at start,
+//!   whatever the ROM left (it hands over with interrupts masked).
 //! - [`halt`] and the panic handler: servo pulses off first, then the
-//!   message on UART0, then a watchdog reset.
+//!   message on UART0, then the strapping pins released, then a watchdog
+//!   reset.
 
 use core::cell::UnsafeCell;
 use core::convert::Infallible;
 use core::fmt::Write as _;
+use core::sync::atomic::{AtomicU32, Ordering};
 
 use embedded_hal_02::digital::v2::OutputPin as OutputPin02;
 use esp8266_hal::gpio::{Gpio0, Gpio12, Gpio14, Gpio16, Gpio2, Gpio4, Gpio5, OpenDrain, Output, PushPull};
@@ -45,6 +49,28 @@ const LEFT_SERVO_MASK: u32 = 1 << config::pins::LEFT_SERVO_GPIO;
 const RIGHT_SERVO_MASK: u32 = 1 << config::pins::RIGHT_SERVO_GPIO;
 /// Interrupt number of FRC1 on the lx106 (esp8266-hal `InterruptType::TIMER1`).
 const FRC1_INTERRUPT_MASK: u32 = 1 << 9;
+/// The strapping pins the lidars' XSHUT lines share: GPIO0 low at a reset
+/// starts the ROM's UART download mode instead of the flash (ESP8266 boot
+/// modes: GPIO15, GPIO0, GPIO2 = 0, 1, 1 boots from flash).
+const STRAPPING_MASK: u32 = (1 << config::pins::FRONT_XSHUT_GPIO) | (1 << config::pins::RIGHT_XSHUT_GPIO);
+
+extern "C" {
+    /// xtensa/asm/handover.S: INTENABLE = 0, then PS = UM (INTLEVEL 0,
+    /// EXCM clear).
+    fn paperbot_interrupt_handover();
+}
+
+/// Takes the interrupts over from whatever ran before (the ROM hands over
+/// with PS.INTLEVEL high, PS.EXCM set and INTENABLE bits the firmware does
+/// not own): every interrupt disabled, then PS at interrupt level 0 with
+/// EXCM clear. Each interrupt the firmware owns is enabled by its owner
+/// (FRC1: [`ServoTimer::start`]), so INTENABLE holds exactly those bits.
+/// Call first thing in `main`.
+pub fn take_over_interrupts() {
+    // SAFETY: a leaf in IRAM that writes INTENABLE and PS only; nothing is
+    // enabled yet, so no handler can run between the two writes.
+    unsafe { paperbot_interrupt_handover() }
+}
 
 #[inline(always)]
 fn gpio() -> &'static pac::gpio::RegisterBlock {
@@ -222,6 +248,10 @@ unsafe impl<T> Sync for IsrCell<T> {}
 
 static SCHEDULER: IsrCell<PulseScheduler> = IsrCell(UnsafeCell::new(PulseScheduler::new()));
 
+/// Pulse frames started so far, as the FRC1 interrupt last saw them: the
+/// loop's proof that the interrupt runs ([`ServoTimer::running`]).
+static SERVO_FRAMES: AtomicU32 = AtomicU32::new(0);
+
 /// What the scheduler drives: CCOUNT, FRC1_LOAD and the two servo pins.
 struct Frc1Hw;
 
@@ -256,6 +286,7 @@ fn frc1_servo_edge() {
     // SAFETY: see `IsrCell`: this handler is the only user now.
     let scheduler = unsafe { &mut *SCHEDULER.0.get() };
     scheduler.on_alarm(&mut Frc1Hw, &SERVO_MAILBOX);
+    SERVO_FRAMES.store(scheduler.frames(), Ordering::Relaxed);
 }
 
 /// Owns FRC1 and the two servo pins while the pulses run.
@@ -263,6 +294,8 @@ pub struct ServoTimer {
     _timer: pac::TIMER,
     _left: Gpio5<Output<PushPull>>,
     _right: Gpio4<Output<PushPull>>,
+    /// CCOUNT when the timer started.
+    started: u32,
 }
 
 impl ServoTimer {
@@ -277,10 +310,27 @@ impl ServoTimer {
         // before the interrupt is on.
         let dport = unsafe { &*pac::DPORT::ptr() };
         dport.edge_int_enable.modify(|_, w| w.timer1_edge_int_enable().set_bit());
+        SERVO_FRAMES.store(0, Ordering::Relaxed);
+        let started = xtensa_lx::timer::get_cycle_count();
         // SAFETY: the interrupt is not enabled yet: no other user.
         unsafe { (*SCHEDULER.0.get()).start(&mut Frc1Hw) };
         esp8266_hal::interrupt::enable_interrupt(esp8266_hal::interrupt::InterruptType::TIMER1);
-        Self { _timer: timer, _left: left, _right: right }
+        Self { _timer: timer, _left: left, _right: right, started }
+    }
+
+    /// Waits until a pulse frame has completed (the second one started),
+    /// at most [`config::board::SERVO_TIMER_CHECK_MS`] after the start; false
+    /// if none did: the FRC1 interrupt does not run, and the pulses are
+    /// stopped (both pins low, [`stop_servo_pulses`]).
+    pub fn running(&self) -> bool {
+        let limit = config::board::SERVO_TIMER_CHECK_MS.saturating_mul(config::board::CPU_HZ / 1_000);
+        while SERVO_FRAMES.load(Ordering::Relaxed) < 2 {
+            if xtensa_lx::timer::get_cycle_count().wrapping_sub(self.started) > limit {
+                stop_servo_pulses();
+                return false;
+            }
+        }
+        true
     }
 
     /// The loop's handle for the servo driver.
@@ -389,15 +439,33 @@ impl core::fmt::Write for HaltUart {
     }
 }
 
+/// Releases the strapping pins GPIO0 and GPIO2 (the lidars' XSHUT lines):
+/// inputs with the internal pull-up on, so that the reset which follows
+/// boots from flash (a lidar held in reset keeps its XSHUT low otherwise,
+/// and GPIO0 low at a reset means UART download mode: a robot dead until
+/// power-cycled). Before any reset the firmware causes.
+pub fn release_strapping_pins() {
+    // SAFETY: called only on the way to a reset: the XSHUT pins' owners
+    // never run again; single writes of the enable strobe and IO_MUX.
+    let dp = unsafe { Peripherals::steal() };
+    #[allow(unused_unsafe)]
+    dp.GPIO.gpio_enable_w1tc.write(|w| unsafe { w.bits(STRAPPING_MASK) });
+    dp.IO_MUX.io_mux_gpio0.modify(|_, w| w.pullup().set_bit());
+    dp.IO_MUX.io_mux_gpio2.modify(|_, w| w.pullup().set_bit());
+}
+
 /// Stops the robot for good, without panicking: servo pulses off first,
-/// then `why` on UART0 (`!` line), then a watchdog reset. For what the
-/// firmware cannot go on from: the panic handler, a failed bring-up.
+/// then `why` on UART0 (`!` line), then the strapping pins released, then
+/// a watchdog reset. For what the firmware cannot go on from: the panic
+/// handler, a failed bring-up.
 pub fn halt(why: core::fmt::Arguments<'_>) -> ! {
     // 1. wheels first
     stop_servo_pulses();
     // 2. say why
     let _ = write!(HaltUart, "\r\n!{}\r\n", why);
-    // 3. reset: arm the watchdog at its shortest stages and never feed it
+    // 3. boot from flash after the reset
+    release_strapping_pins();
+    // 4. reset: arm the watchdog at its shortest stages and never feed it
     // SAFETY: nothing else runs any more (the servo interrupt is masked and
     // the caller never gets control back).
     let dp = unsafe { Peripherals::steal() };

@@ -10,18 +10,24 @@
 //! it through power-off, but writing flash needs the SDK's flash routines
 //! and stopping the flash cache the loop's code runs from: not done here.
 //!
-//! The words go at 0x60001100, the start of the 512 bytes Espressif's SDK
-//! leaves to the user (the 256 below are the SDK's and the ROM's); nothing
-//! is linked into `memory.x`'s `rtc_seg`. RTC memory is on the peripheral
-//! bus: only 32-bit accesses, hence words and volatile reads and writes.
+//! The words go at 0x60001200, the start of the 512 bytes of user RTC
+//! memory (0x60001200..0x60001400). Espressif's NONOS SDK addresses RTC
+//! memory in 4-byte blocks from 0x60001100 and leaves blocks 64..191 to the
+//! user (`system_rtc_mem_write`: "des_addr >= 64"; the 256 bytes below are
+//! the SDK's system area); the ESP8266 Arduino core's
+//! `ESP.rtcUserMemoryWrite` writes block 64 + offset with a 512-byte bound,
+//! its eboot keeps its command at 0x60001200. Nothing is linked into
+//! `memory.x`'s `rtc_seg`. RTC memory is on the peripheral bus: only 32-bit
+//! accesses, hence words and volatile reads and writes.
 
 use crate::control::mission::{MissionStore, WORDS};
 
-/// First word of the user part of RTC memory.
-const RTC_USER_MEMORY: usize = 0x6000_1100;
-/// Bytes of it.
+/// First word of the user part of RTC memory (SDK block 64).
+const RTC_USER_MEMORY: usize = 0x6000_1200;
+/// Bytes of it: to 0x60001400 (SDK block 191), the end of RTC memory.
 const RTC_USER_BYTES: usize = 512;
 const _: () = assert!(WORDS * 4 <= RTC_USER_BYTES);
+const _: () = assert!(RTC_USER_MEMORY + RTC_USER_BYTES == 0x6000_1400);
 
 /// The mission store in RTC memory (see the module docs).
 pub struct RtcMissionStore;

@@ -24,3 +24,7 @@ pub const WATCHDOG_MS: u32 = 1_680;
 pub const LED_BLINK_OK_MS: u32 = 500;
 /// LED half period while a sensor is down (`src/bin/firmware.rs`), ms.
 pub const LED_BLINK_FAULT_MS: u32 = 100;
+/// At start, a servo pulse frame (20 ms, after a 1 ms start delay) must
+/// have completed this long after the servo timer started, or the FRC1
+/// interrupt is reported not running, ms (issue 28).
+pub const SERVO_TIMER_CHECK_MS: u32 = 50;

@@ -1,6 +1,9 @@
 //! The checks `cargo fw-image` makes on the linked firmware; each failure
 //! fails the build:
 //!
+//! - the entry point is esp8266-hal's reset routine, in IRAM (the ROM jumps
+//!   there with the flash cache off: it enables the cache and the PLL, then
+//!   runs xtensa-lx-rt's `Reset`);
 //! - no undefined symbol but `DefaultHandler` (memory.x's EXTERN, never called);
 //! - the exception vectors where the lx106 takes them;
 //! - everything reachable from the level-1 interrupt entry in IRAM or ROM:
@@ -35,6 +38,10 @@ const VECTORS: [(&str, u32); 5] = [
     ("_DoubleExceptionVector", 0x4010_0070),
 ];
 
+/// esp8266-hal's reset routine (`ESP8266Reset`, `#[ram]`): the ELF's entry
+/// (memory.x's ENTRY), which the boot image's header hands the ROM.
+const RESET_ROUTINE: &str = "ESP8266Reset";
+
 /// What the interrupt-reach check walks from: the level-1 interrupt
 /// handler the user vector's code calls (esp8266-hal's dispatcher).
 const INTERRUPT_ENTRY: &str = "__level_1_interrupt";
@@ -65,6 +72,12 @@ pub fn check(path: &Path) -> Result<String, String> {
     }
 
     let symbols = symbol_addresses(&file);
+    match check_entry(file.entry(), symbols.get(RESET_ROUTINE).copied()) {
+        Ok(line) => {
+            let _ = writeln!(report, "  {line}");
+        }
+        Err(e) => failures.push(e),
+    }
     for (name, want) in VECTORS {
         match symbols.get(name) {
             Some(&at) if at == want => {}
@@ -120,6 +133,21 @@ pub fn check(path: &Path) -> Result<String, String> {
     } else {
         Err(format!("{report}the firmware image fails its checks:\n  - {}", failures.join("\n  - ")))
     }
+}
+
+/// The entry must be [`RESET_ROUTINE`]'s address, in IRAM: the ROM calls it
+/// before anything has enabled the flash cache.
+fn check_entry(entry: u64, reset: Option<u32>) -> Result<String, String> {
+    let Some(reset) = reset else {
+        return Err(format!("{RESET_ROUTINE} (esp8266-hal's reset routine) not found"));
+    };
+    if entry != u64::from(reset) {
+        return Err(format!("entry point {entry:#010x} is not {RESET_ROUTINE} ({reset:#010x})"));
+    }
+    if !IRAM.contains(&reset) {
+        return Err(format!("entry point {RESET_ROUTINE} at {reset:#010x} is not in IRAM"));
+    }
+    Ok(format!("entry point: {entry:#010x} = {RESET_ROUTINE} (esp8266-hal's reset routine), in IRAM"))
 }
 
 fn undefined_symbols(file: &object::File) -> Vec<String> {
@@ -434,5 +462,13 @@ mod tests {
         assert!(writes_first_operand("l32i.n"));
         assert!(writes_first_operand("mov.n"));
         assert!(writes_first_operand("addi"));
+    }
+
+    #[test]
+    fn the_entry_must_be_the_reset_routine_in_iram() {
+        assert!(check_entry(0x4010_01b4, Some(0x4010_01b4)).unwrap().contains("in IRAM"));
+        assert!(check_entry(0x4021_0000, Some(0x4010_01b4)).unwrap_err().contains("is not ESP8266Reset"));
+        assert!(check_entry(0x4021_0000, Some(0x4021_0000)).unwrap_err().contains("not in IRAM"));
+        assert!(check_entry(0x4010_01b4, None).unwrap_err().contains("not found"));
     }
 }

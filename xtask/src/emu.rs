@@ -14,6 +14,7 @@ mod qemu;
 mod selftest;
 mod sim;
 mod simtest;
+mod strict;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -32,8 +33,10 @@ usage: cargo fw-emu [--seconds S] [--input FILE] [--pulses]
                 every 100 virtual ms
   --pulses      at the end, per servo pin: gpioN pulses=N period_us=P
                 width_us=W (median period, last pulse's width)
-  --self-test   boot the image and a watchdog test image, check the board
-                and the firmware on it; prints 'N passed, N failed'
+  --self-test   boot the image and the board's test images, check the
+                board and the firmware on it, and that the board refuses
+                deliberately broken images as the chip would (issue 28);
+                prints 'N passed, N failed'
   --sim         the board's I2C, XSHUT and servo pins and UART0 wired to
                 the simulated robot (src/sim/link.rs): the script (default:
                 laps, as `simulate`) runs for --seconds (default 20) after
@@ -150,6 +153,7 @@ pub fn main(args: &[String]) -> Result<(), String> {
         input_gap_ms: INPUT_GAP_MS,
         sim: None,
         profile: None,
+        board_options: "",
     };
     let Some(seconds) = options.seconds else {
         return board.run_pty(&session);

@@ -1,46 +1,77 @@
 //! `cargo fw-image`: the firmware for the ESP8266 built with upstream
-//! nightly, linked, checked, and written as the images esptool flashes.
+//! nightly (the dated one named in `xtensa/nightly`), linked, checked, and
+//! written as the images esptool flashes, with the module's flash
+//! parameters in the boot image's header.
 //!
 //! 1. `cargo fetch`, then the registry crates with assembly rewritten
 //!    ([`crate::patch`]) under `target/image/crates/`;
 //! 2. `xtensa/asm/*.S` assembled with GNU as;
-//! 3. `cargo +nightly build` of `src/bin/firmware.rs` for
+//! 3. `cargo +<xtensa/nightly> build` of `src/bin/firmware.rs` for
 //!    `xtensa/xtensa-esp8266-none-elf.json` with the rewritten crates
 //!    patched in, linked through `xtensa/xt-link.sh` (GNU as, the literal
 //!    fix) with our `memory.x`, `exception.x` and `rom-functions.x`;
-//! 4. the checks of [`crate::elf`] (undefined symbols, vectors, interrupt
-//!    code in IRAM, budgets), each failing the build;
-//! 5. esptool's `elf2image` and `image-info` ([`crate::esptool`]).
+//! 4. the checks of [`crate::elf`] (entry point, undefined symbols,
+//!    vectors, interrupt code in IRAM, budgets), each failing the build;
+//! 5. esptool's `elf2image` with the flash parameters, and `image-info`,
+//!    which must report them ([`crate::esptool`]).
 use std::fs;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+use crate::esptool::FlashParams;
 use crate::{elf, esptool, patch};
 
 const USAGE: &str = "\
-usage: cargo fw-image [--clippy]
+usage: cargo fw-image [--clippy] [--flash-mode M] [--flash-freq F] [--flash-size S]
 
-Builds src/bin/firmware.rs for the ESP8266 with upstream nightly and writes
+Builds src/bin/firmware.rs for the ESP8266 with the dated upstream nightly
+named in xtensa/nightly and writes
   target/image/paperbot.elf          the linked firmware
   target/image/paperbot-0x00000.bin  the boot image (flash offset 0x00000)
   target/image/paperbot-0x10000.bin  the flash-mapped code (offset 0x10000)
 then checks the ELF and prints the memory budget.
 
-  --clippy   first run clippy (the panic lints) on the board code and the
-             firmware, for the same target, warnings as errors
+  --clippy        first run clippy (the panic lints) on the board code and
+                  the firmware, for the same target, warnings as errors
+  --flash-mode M  the flash mode the ROM boots with: qio, qout, dio, dout
+                  (default dio: the NodeMCU's ESP-12E boots only with dio)
+  --flash-freq F  the flash clock: 40m, 26m, 20m, 80m (default 40m)
+  --flash-size S  the module's flash: 512KB, 1MB, 2MB, 4MB, ... (default
+                  4MB, the ESP-12E's)
+The three go into the boot image's header; esptool image-info must report
+them, or the build fails.
 
-Needs: rustup nightly with rust-src; Debian packages gcc-xtensa-lx106
-binutils-xtensa-lx106; python3 with venv (esptool comes from PyPI).";
+Needs: rustup's nightly of xtensa/nightly with rust-src; Debian packages
+gcc-xtensa-lx106 binutils-xtensa-lx106; python3 with venv (esptool comes
+from PyPI).";
 
 /// The tools the build calls, by name (PATH).
 pub const XT_GCC: &str = "xtensa-lx106-elf-gcc";
 pub const XT_OBJDUMP: &str = "xtensa-lx106-elf-objdump";
 
+/// The dated nightly the image is built with (`xtensa/nightly`, one line:
+/// the link wrapper and the literal fix are written for its output).
+pub fn nightly(root: &Path) -> Result<String, String> {
+    let path = root.join("xtensa/nightly");
+    let text = fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let name = text.trim();
+    if !name.starts_with("nightly-") || name.contains(char::is_whitespace) {
+        return Err(format!("{}: '{name}' is not a dated nightly (nightly-YYYY-MM-DD)", path.display()));
+    }
+    Ok(name.to_string())
+}
+
 pub fn main(args: &[String]) -> Result<(), String> {
     let mut clippy = false;
-    for arg in args {
+    let mut flash = FlashParams::default();
+    let mut it = args.iter();
+    while let Some(arg) = it.next() {
+        let mut value = || it.next().cloned().ok_or_else(|| format!("{arg} needs a value\n{USAGE}"));
         match arg.as_str() {
             "--clippy" => clippy = true,
+            "--flash-mode" => flash.mode = value()?,
+            "--flash-freq" => flash.freq = value()?,
+            "--flash-size" => flash.size = value()?,
             "--help" | "-h" => {
                 println!("{USAGE}");
                 return Ok(());
@@ -48,9 +79,11 @@ pub fn main(args: &[String]) -> Result<(), String> {
             other => return Err(format!("unknown option '{other}'\n{USAGE}")),
         }
     }
+    flash.validate()?;
     let root = repo_root();
     let work = root.join("target/image");
-    check_tools()?;
+    let nightly = nightly(&root)?;
+    check_tools(&nightly)?;
     fs::create_dir_all(&work).map_err(|e| format!("{}: {e}", work.display()))?;
 
     println!("== registry crates with assembly, rewritten (target/image/crates/)");
@@ -65,11 +98,11 @@ pub fn main(args: &[String]) -> Result<(), String> {
 
     if clippy {
         println!("== clippy on the firmware and the board code (the panic lints)");
-        run_cargo(nightly_cargo(&root, &work, &patched, &objects, "clippy").args(["--", "-D", "warnings"]))?;
+        run_cargo(nightly_cargo(&root, &work, &nightly, &patched, &objects, "clippy").args(["--", "-D", "warnings"]))?;
     }
 
-    println!("== cargo +nightly build (firmware profile, xtensa-esp8266-none-elf)");
-    run_cargo(&mut nightly_cargo(&root, &work, &patched, &objects, "build"))?;
+    println!("== cargo +{nightly} build (firmware profile, xtensa-esp8266-none-elf)");
+    run_cargo(&mut nightly_cargo(&root, &work, &nightly, &patched, &objects, "build"))?;
     let built = work.join("build/xtensa-esp8266-none-elf/firmware/firmware");
     let elf_path = work.join("paperbot.elf");
     fs::copy(&built, &elf_path).map_err(|e| format!("{}: {e}", built.display()))?;
@@ -79,8 +112,11 @@ pub fn main(args: &[String]) -> Result<(), String> {
     print!("{report}");
 
     println!("== esptool");
-    esptool::write_images(&root, &elf_path, &work.join("paperbot-"))?;
-    println!("\nflash with:\n  esptool --chip esp8266 write_flash 0x00000 target/image/paperbot-0x00000.bin 0x10000 target/image/paperbot-0x10000.bin");
+    esptool::write_images(&root, &elf_path, &work.join("paperbot-"), &flash)?;
+    println!(
+        "\nflash with:\n  esptool --chip esp8266 write-flash --flash-mode {} --flash-freq {} --flash-size {} \\\n    0x00000 target/image/paperbot-0x00000.bin 0x10000 target/image/paperbot-0x10000.bin",
+        flash.mode, flash.freq, flash.size
+    );
     Ok(())
 }
 
@@ -93,18 +129,20 @@ fn rel(root: &Path, path: &Path) -> String {
     path.strip_prefix(root).unwrap_or(path).display().to_string()
 }
 
-fn check_tools() -> Result<(), String> {
+fn check_tools(nightly: &str) -> Result<(), String> {
     for tool in [XT_GCC, XT_OBJDUMP] {
         if Command::new(tool).arg("--version").output().is_err() {
             return Err(format!("{tool} not found: apt-get install gcc-xtensa-lx106 binutils-xtensa-lx106"));
         }
     }
-    let sysroot = Command::new("rustc").args(["+nightly", "--print", "sysroot"]).output();
+    let sysroot = Command::new("rustc").arg(format!("+{nightly}")).args(["--print", "sysroot"]).output();
     let has_src = sysroot.ok().filter(|o| o.status.success()).is_some_and(|o| {
         Path::new(String::from_utf8_lossy(&o.stdout).trim()).join("lib/rustlib/src/rust/library/core").is_dir()
     });
     if !has_src {
-        return Err("nightly with rust-src needed: rustup component add rust-src --toolchain nightly".into());
+        return Err(format!(
+            "{nightly} with rust-src needed (xtensa/nightly): rustup toolchain install {nightly} --profile minimal --component rust-src,clippy"
+        ));
     }
     Ok(())
 }
@@ -130,10 +168,17 @@ fn assemble(root: &Path, work: &Path) -> Result<Vec<PathBuf>, String> {
     Ok(objects)
 }
 
-/// `cargo +nightly <verb>` of the firmware with everything the image needs
+/// `cargo +<nightly> <verb>` of the firmware with everything the image needs
 /// passed on the command line, so that the repository's own files stay as
 /// the esp toolchain reads them.
-fn nightly_cargo(root: &Path, work: &Path, patched: &[patch::Patched], objects: &[PathBuf], verb: &str) -> Command {
+fn nightly_cargo(
+    root: &Path,
+    work: &Path,
+    nightly: &str,
+    patched: &[patch::Patched],
+    objects: &[PathBuf],
+    verb: &str,
+) -> Command {
     let lock = work.join("Cargo.lock");
     let target = root.join("xtensa/xtensa-esp8266-none-elf.json");
     let link_args: Vec<String> = objects.iter().map(|o| format!("\"-C\", \"link-arg={}\"", o.display())).collect();
@@ -143,7 +188,8 @@ fn nightly_cargo(root: &Path, work: &Path, patched: &[patch::Patched], objects: 
     for var in ["RUSTUP_TOOLCHAIN", "RUSTC", "RUSTDOC", "RUSTC_WRAPPER", "RUSTFLAGS", "CARGO_TARGET_DIR", "CARGO"] {
         cmd.env_remove(var);
     }
-    cmd.args(["+nightly", verb, "-Zbuild-std=core", "-Zjson-target-spec", "-Zprofile-rustflags"])
+    cmd.arg(format!("+{nightly}"))
+        .args([verb, "-Zbuild-std=core", "-Zjson-target-spec", "-Zprofile-rustflags"])
         .args(["--profile", "firmware", "--features", "firmware", "--bin", "firmware"])
         .arg("--target")
         .arg(&target)

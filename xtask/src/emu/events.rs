@@ -11,6 +11,9 @@ pub struct Events {
     pub inputs: Vec<(u64, String)>,
     /// Virtual ns of each watchdog reset.
     pub watchdog_resets: Vec<u64>,
+    /// Every other event: (virtual ns, text), e.g. `download-mode`,
+    /// `cpu-clock 80000000`, `uart0-baud 74928`, `flash-cache-off 0x...`.
+    pub others: Vec<(u64, String)>,
 }
 
 /// A pin's level change.
@@ -43,6 +46,8 @@ impl Events {
                 events.inputs.push((ns, input.trim_end_matches('\r').to_string()));
             } else if event == "reset watchdog" {
                 events.watchdog_resets.push(ns);
+            } else {
+                events.others.push((ns, event.to_string()));
             }
         }
         Ok(events)
@@ -65,6 +70,11 @@ impl Events {
             }
         }
         pulses
+    }
+
+    /// The first other event that starts with `prefix`: (ns, text).
+    pub fn first(&self, prefix: &str) -> Option<&(u64, String)> {
+        self.others.iter().find(|(_, e)| e.starts_with(prefix))
     }
 
     /// The times `pin` changed level in `[from_ns, to_ns)`.

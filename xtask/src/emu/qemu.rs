@@ -15,7 +15,7 @@ const ICOUNT_SHIFT: u32 = 4;
 /// the loop's or the I2C clock's period.
 pub const PROFILE_NS: u32 = 10_007;
 
-/// The built board: QEMU, the ROM and the watchdog test image.
+/// The built board: QEMU, the ROM and the test images.
 pub struct Board {
     dir: PathBuf,
 }
@@ -34,6 +34,8 @@ pub struct Session<'a> {
     pub sim: Option<&'a Path>,
     /// Where the board writes its PC samples.
     pub profile: Option<&'a Path>,
+    /// More machine options, `name=value,...` (e.g. `uart-baud=74880`), or "".
+    pub board_options: &'a str,
 }
 
 /// What a timed run printed.
@@ -58,9 +60,10 @@ impl Board {
         Ok(Board { dir })
     }
 
-    /// The ELF of emu/test/wdt_starve.S.
-    pub fn watchdog_test_elf(&self) -> PathBuf {
-        self.dir.join("wdt-starve.elf")
+    /// The ELF of a test image: emu/test/probe.c built for `mode` (wdt,
+    /// gpio0-low, no-pll, ram, narrow-iram, narrow-flash).
+    pub fn probe_elf(&self, mode: &str) -> PathBuf {
+        self.dir.join(format!("probe-{mode}.elf"))
     }
 
     fn command(&self, s: &Session, stop_ms: Option<u32>, icount: &str, serial: &str) -> Command {
@@ -88,6 +91,9 @@ impl Board {
         }
         if let Some(ms) = stop_ms {
             machine += &format!(",stop-ms={ms}");
+        }
+        if !s.board_options.is_empty() {
+            machine += &format!(",{}", s.board_options);
         }
         let mut cmd = Command::new(self.dir.join("qemu-system-xtensa"));
         cmd.args(["-M", &machine, "-cpu", "lx106", "-nodefaults", "-display", "none", "-monitor", "none"]);

@@ -21,6 +21,9 @@ const PERIOD_TOLERANCE_US: f64 = 20.0;
 /// The LED's half period may be off by this much, ms (the loop's 10 ms tick
 /// polls it).
 const BLINK_TOLERANCE_MS: f64 = 10.0;
+/// The firmware's line when the servo timer interrupt does not run
+/// (src/bin/firmware.rs).
+const FAULT_SERVO_TIMER: &str = "# fault: servo timer interrupt not running";
 
 #[derive(Default)]
 pub(super) struct Report {
@@ -52,8 +55,9 @@ impl Report {
 
 /// The numbers the checks need from the config (src/config/).
 pub(super) struct Expect {
-    banner: String,
+    pub(super) banner: String,
     pub(super) deadman_ns: u64,
+    pub(super) fault_servo_timer: &'static str,
     blink_fault_ms: f64,
     frame_us: f64,
     pulse_at_0_us: f64,
@@ -66,6 +70,7 @@ impl Expect {
         let get = |name: &str| config_u32(&config, name).ok_or(format!("src/config/ has no `const {name}: u32`"));
         Ok(Expect {
             banner: banner(root)?,
+            fault_servo_timer: FAULT_SERVO_TIMER,
             deadman_ns: u64::from(get("DEADMAN_MS")?) * MS,
             blink_fault_ms: f64::from(get("LED_BLINK_FAULT_MS")?),
             frame_us: f64::from(get("FRAME_US")?),
@@ -103,12 +108,15 @@ fn config_u32(source: &str, name: &str) -> Option<u32> {
 }
 
 /// One timed boot: UART0 output and the event log.
-struct Run {
-    output: Output,
-    events: Events,
+pub(super) struct Run {
+    pub(super) output: Output,
+    pub(super) events: Events,
 }
 
-fn boot(
+/// A timed boot of `flash`, with more machine options (`uart-baud=74880`,
+/// ...) or none ("").
+#[allow(clippy::too_many_arguments)]
+pub(super) fn boot(
     board: &Board,
     work: &Path,
     name: &str,
@@ -116,6 +124,7 @@ fn boot(
     input: &[&str],
     seconds: f64,
     after: &str,
+    board_options: &str,
 ) -> Result<Run, String> {
     let events_path = work.join(format!("selftest-{name}.events"));
     let input_path = work.join(format!("selftest-{name}.input"));
@@ -129,6 +138,7 @@ fn boot(
         input_gap_ms: INPUT_GAP_MS,
         sim: None,
         profile: None,
+        board_options,
     };
     let output = board.run_timed(&session, (seconds * 1000.0) as u32, false)?;
     let events = read_events(&events_path)?;
@@ -165,9 +175,24 @@ fn check_pulses(r: &mut Report, run: &Run, name: &str, from: u64, to: u64, width
 /// failing, the wheels still, LED blink, no watchdog reset.
 fn idle(r: &mut Report, board: &Board, work: &Path, flash: &Path, e: &Expect) -> Result<(), String> {
     const SECONDS: f64 = 10.0;
-    let run = boot(board, work, "idle", flash, &["status"], SECONDS, &e.banner)?;
+    let run = boot(board, work, "idle", flash, &["status"], SECONDS, &e.banner, "")?;
     let uart = &run.output.uart;
     r.check("banner", uart.contains(&e.banner), format!("'{}' {}", e.banner, found(uart.contains(&e.banner))));
+    let fault = uart.contains(FAULT_SERVO_TIMER);
+    r.check(
+        "the servo timer interrupt runs (PS and INTENABLE taken over from the ROM)",
+        !fault,
+        format!("'{FAULT_SERVO_TIMER}' {}", if fault { "printed" } else { "not printed" }),
+    );
+    // from the CR LF before the banner to the end: every LF after a CR
+    let from_banner = uart.find(&e.banner).map_or("", |at| &uart[at.saturating_sub(2)..]);
+    let bare = from_banner.as_bytes().windows(2).filter(|w| w[1] == b'\n' && w[0] != b'\r').count();
+    let lines = from_banner.matches('\n').count();
+    r.check(
+        "every line on UART0 ends in CR LF",
+        !from_banner.is_empty() && bare == 0,
+        format!("{lines} lines from the banner on, {bare} ending in a bare LF"),
+    );
     let status = uart.lines().find(|l| l.starts_with("# status"));
     r.check("status answered", status.is_some(), status.unwrap_or("no '# status' line"));
     let down = ["front=down", "right=down", "compass=down"];
@@ -208,7 +233,7 @@ fn idle(r: &mut Report, board: &Board, work: &Path, flash: &Path, e: &Expect) ->
 
 /// `servo 120 60 5` (5 s): the commanded widths.
 fn servo(r: &mut Report, board: &Board, work: &Path, flash: &Path, e: &Expect) -> Result<(), String> {
-    let run = boot(board, work, "servo", flash, &["servo 120 60 5"], 1.5, &e.banner)?;
+    let run = boot(board, work, "servo", flash, &["servo 120 60 5"], 1.5, &e.banner, "")?;
     let t = input_time(&run, "servo 120 60 5")?;
     let driving = [e.width_us(120.0), e.width_us(60.0)];
     check_pulses(r, &run, "servo 120 60 5", t + 60 * MS, u64::MAX, driving, e);
@@ -218,7 +243,7 @@ fn servo(r: &mut Report, board: &Board, work: &Path, flash: &Path, e: &Expect) -
 /// `servo 120 60` (no duration: until the next command), then silence: the
 /// commanded widths until the deadman stops the wheels, neutral after.
 fn deadman(r: &mut Report, board: &Board, work: &Path, flash: &Path, e: &Expect) -> Result<(), String> {
-    let run = boot(board, work, "deadman", flash, &["servo 120 60"], 2.0, &e.banner)?;
+    let run = boot(board, work, "deadman", flash, &["servo 120 60"], 2.0, &e.banner, "")?;
     let t = input_time(&run, "servo 120 60")?;
     let driving = [e.width_us(120.0), e.width_us(60.0)];
     check_pulses(r, &run, "servo 120 60 until the deadman", t + 60 * MS, t + e.deadman_ns - 50 * MS, driving, e);
@@ -229,28 +254,39 @@ fn deadman(r: &mut Report, board: &Board, work: &Path, flash: &Path, e: &Expect)
 
 /// `servo 120 60 5` then `stop` 100 ms later: neutral before the deadman.
 fn stop(r: &mut Report, board: &Board, work: &Path, flash: &Path, e: &Expect) -> Result<(), String> {
-    let run = boot(board, work, "stop", flash, &["servo 120 60 5", "stop"], 1.5, &e.banner)?;
+    let run = boot(board, work, "stop", flash, &["servo 120 60 5", "stop"], 1.5, &e.banner, "")?;
     let t = input_time(&run, "stop")?;
     let neutral = [e.width_us(90.0); 2];
     check_pulses(r, &run, "neutral after stop", t + 40 * MS, t + e.deadman_ns - 50 * MS, neutral, e);
     Ok(())
 }
 
-/// The test image stops feeding the watchdog after 0.5 s: the board must
-/// reset it two stages (2 x 0.84 s) later, and the ROM boot it again.
+/// A test image (emu/test/probe.c, `mode`) as a DIO boot image on the
+/// board's flash; the flash file.
+pub(super) fn probe_flash(root: &Path, board: &Board, work: &Path, mode: &str) -> Result<std::path::PathBuf, String> {
+    let flash_params = crate::esptool::FlashParams::default();
+    let prefix = work.join(format!("selftest-probe-{mode}-"));
+    let image = crate::esptool::boot_image(root, &board.probe_elf(mode), &prefix, &flash_params)?;
+    let flash = work.join(format!("selftest-probe-{mode}-flash.bin"));
+    std::fs::write(&flash, compose(&read(&image)?, &[])?).map_err(|e| format!("{}: {e}", flash.display()))?;
+    Ok(flash)
+}
+
+/// The test image stops feeding the watchdog 0.5 s after its PLL write:
+/// the board must reset it two stages (2 x 0.84 s) later, and the ROM boot
+/// it again.
 fn watchdog(r: &mut Report, root: &Path, board: &Board, work: &Path) -> Result<(), String> {
     const STARVE_NS: u64 = 500 * MS;
     const STAGES_NS: u64 = 2 * (1 << 26) * 1000 / 80; // 2 x 2^26 cycles at 80 MHz
-    let image = crate::esptool::boot_image(root, &board.watchdog_test_elf(), &work.join("selftest-wdt-"))?;
-    let flash = work.join("selftest-wdt-flash.bin");
-    std::fs::write(&flash, compose(&read(&image)?, &[])?).map_err(|e| format!("{}: {e}", flash.display()))?;
-    let run = boot(board, work, "wdt", &flash, &[], 3.0, "")?;
+    let flash = probe_flash(root, board, work, "wdt")?;
+    let run = boot(board, work, "wdt", &flash, &[], 3.0, "", "")?;
     let resets = &run.events.watchdog_resets;
-    let want = STARVE_NS + STAGES_NS;
+    let pll_at = run.events.first("cpu-clock 80000000").map_or(0, |&(ns, _)| ns);
+    let want = pll_at + STARVE_NS + STAGES_NS;
     let at = resets.first().copied().unwrap_or(0);
     let close = at.abs_diff(want) < MS;
     let uart = &run.output.uart;
-    let rebooted = uart.contains("wdt-test: starving") && uart.contains("wdt-test: boot 2");
+    let rebooted = uart.contains("probe: starving") && uart.contains("probe: boot 2");
     let reported = run.output.stderr.contains("watchdog reset");
     r.check(
         "an image that stops feeding the watchdog is reset",
@@ -284,6 +320,7 @@ pub fn run(root: &Path, board: &Board, work: &Path, boot_bin: &Path, irom_bin: &
     deadman(&mut report, board, work, &flash, &expect)?;
     stop(&mut report, board, work, &flash, &expect)?;
     watchdog(&mut report, root, board, work)?;
+    super::strict::run(&mut report, root, board, work, &expect)?;
     println!("{} passed, {} failed", report.passed, report.failed);
     if report.failed > 0 {
         return Err(format!("fw-emu self-test: {} check(s) failed", report.failed));
@@ -307,6 +344,7 @@ mod tests {
     fn servo_widths_match_the_issue() {
         let e = Expect {
             banner: String::new(),
+            fault_servo_timer: FAULT_SERVO_TIMER,
             deadman_ns: 0,
             blink_fault_ms: 0.0,
             frame_us: 0.0,

@@ -94,6 +94,7 @@ pub fn run(
         input_gap_ms: 0,
         sim: Some(&socket),
         profile: Some(&profile),
+        board_options: "",
     };
     let stop_ms = ((o.seconds + BRING_UP_ALLOWANCE_S) * 1000.0) as u32;
     let output = board.run_timed(&session, stop_ms, echo);
