@@ -71,7 +71,7 @@ use crate::control::protocol::{
     format_response, format_status, format_telemetry, telemetry_header, Command, FaultCounters, LineBuffer, OutLine,
     ParseError, Response, Side, Telemetry, HELP, MAX_OUT_LINE,
 };
-use crate::driver::{CompassSample, HeadingSensor, LidarSample, MagCalibrate, Servos};
+use crate::driver::{CompassSample, HeadingSensor, LidarSample, RangeSensor, Servos};
 use crate::math::{div_u64, Angle, Dt, Length};
 use crate::model::compass::{CalStatus, MagCalibrator};
 use crate::model::estimator::{Estimator, Update};
@@ -82,8 +82,8 @@ pub use health::SensorHealth;
 pub use mode::Mode;
 pub use untethered::{MissionPhase, MissionRun};
 
+pub use crate::control::hardware::Hardware;
 use crate::control::localize::{Failure, Procedure};
-use crate::control::log::{RingLog, RowLog};
 use crate::control::mission::Mission;
 
 /// Where the loop writes its output lines (without terminators): the UART
@@ -92,11 +92,11 @@ pub trait LineSink {
     fn write_line(&mut self, line: &str);
 }
 
-/// The control loop, generic over the drivers and the on-board log (see
-/// the module docs). [`Controller::new`] has no log (every row is dropped
-/// and counted); [`Controller::with_log`] takes one.
+/// The control loop over the robot's [`Hardware`] (see the module docs).
+/// [`Controller::new`] starts with a new log (`RingLog<0>` keeps none:
+/// every row is dropped and counted); [`Controller::with_log`] takes one.
 #[repr(C)]
-pub struct Controller<F, R, C, S, L = RingLog<0>> {
+pub struct Controller<H: Hardware> {
     // tick bar: declared order (repr(C)), small and hot fields first: the
     // lx106's loads and stores take an offset of at most 255 bytes for a
     // u8, 510 for a u16 and 1020 for a u32, and a field further out costs
@@ -160,10 +160,10 @@ pub struct Controller<F, R, C, S, L = RingLog<0>> {
     dump_next: Option<usize>,
     /// The mission changed since [`Controller::take_mission_changed`].
     mission_changed: bool,
-    front: F,
-    right: R,
-    compass: C,
-    servos: S,
+    front: H::Front,
+    right: H::Right,
+    compass: H::Compass,
+    servos: H::Servos,
     /// The actuator model with the run-time trims.
     model: ActuatorModel,
     input: LineBuffer,
@@ -175,40 +175,45 @@ pub struct Controller<F, R, C, S, L = RingLog<0>> {
     locating: Procedure,
     /// The `goto` or `face` that waits for the localization's fix.
     after_locate: Option<Command>,
-    log: L,
+    log: H::Log,
 }
 
-impl<F, R, C, S> Controller<F, R, C, S>
+impl<H: Hardware> Controller<H>
 where
-    F: crate::driver::RangeSensor,
-    R: crate::driver::RangeSensor,
-    C: HeadingSensor + MagCalibrate,
-    S: Servos,
+    H::Log: Default,
 {
     /// A loop over sensors the caller has brought up (a sensor that fails
     /// later is re-initialised by the loop), starting at `pose` in the
-    /// config's arena, stopped.
-    pub fn new(front: F, right: R, compass: C, servos: S, pose: Pose) -> Self {
+    /// config's arena, stopped, with a new log.
+    pub fn new(front: H::Front, right: H::Right, compass: H::Compass, servos: H::Servos, pose: Pose) -> Self {
         Self::new_in(front, right, compass, servos, pose, Arena::DEFAULT)
     }
 
     /// [`Controller::new`] in another arena (the simulator's).
-    pub fn new_in(front: F, right: R, compass: C, servos: S, pose: Pose, arena: Arena) -> Self {
-        Controller::with_log(front, right, compass, servos, pose, arena, RingLog::new())
+    pub fn new_in(
+        front: H::Front,
+        right: H::Right,
+        compass: H::Compass,
+        servos: H::Servos,
+        pose: Pose,
+        arena: Arena,
+    ) -> Self {
+        Controller::with_log(front, right, compass, servos, pose, arena, H::Log::default())
     }
 }
 
-impl<F, R, C, S, L> Controller<F, R, C, S, L>
-where
-    F: crate::driver::RangeSensor,
-    R: crate::driver::RangeSensor,
-    C: HeadingSensor + MagCalibrate,
-    S: Servos,
-    L: RowLog,
-{
+impl<H: Hardware> Controller<H> {
     /// [`Controller::new_in`] with an on-board log (the firmware's is a
     /// static, in the DRAM budget).
-    pub fn with_log(front: F, right: R, compass: C, servos: S, pose: Pose, arena: Arena, log: L) -> Self {
+    pub fn with_log(
+        front: H::Front,
+        right: H::Right,
+        compass: H::Compass,
+        servos: H::Servos,
+        pose: Pose,
+        arena: Arena,
+        log: H::Log,
+    ) -> Self {
         let model = config::actuators::MODEL;
         Controller {
             front,
@@ -621,7 +626,7 @@ where
     }
 }
 
-impl<F, R, C, S, L> Controller<F, R, C, S, L> {
+impl<H: Hardware> Controller<H> {
     /// A telemetry row's values now, with the readings flagged fresh
     /// (front, right, compass).
     fn snapshot(&self, [front, right, compass]: [bool; 3]) -> Telemetry {

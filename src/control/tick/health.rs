@@ -2,9 +2,9 @@
 //! faults, taking it down and re-initialising it after a back-off.
 
 use super::clock::{ms_to_us, reached, Stamp};
-use super::Controller;
+use super::{Controller, Hardware};
 use crate::config;
-use crate::driver::{HeadingSensor, LidarSample, MagCalibrate, SensorError, Servos};
+use crate::driver::{HeadingSensor, LidarSample, RangeSensor, SensorError};
 use crate::model::Range;
 
 /// One sensor's health.
@@ -44,13 +44,7 @@ pub(super) enum Which {
     Compass,
 }
 
-impl<F, R, C, S, L> Controller<F, R, C, S, L>
-where
-    F: crate::driver::RangeSensor,
-    R: crate::driver::RangeSensor,
-    C: HeadingSensor + MagCalibrate,
-    S: Servos,
-{
+impl<H: Hardware> Controller<H> {
     /// True when a sensor is up, to be polled. A sensor that is down is
     /// re-initialised when its back-off is over and no other sensor was
     /// re-initialised in this tick (a bring-up blocks the loop, so one per

@@ -4,11 +4,9 @@
 //! failed` says how it went.
 
 use super::clock::Timer;
-use super::{Controller, LineSink, Mode};
+use super::{Controller, Hardware, LineSink, Mode};
 use crate::config::locate as cfg;
-use crate::control::log::RowLog;
 use crate::control::protocol::number::{push_fixed_parts, push_i32, push_str, push_u32};
-use crate::driver::{HeadingSensor, MagCalibrate, Servos};
 use crate::math::TurnRate;
 use crate::model::locate::Fix;
 use crate::model::measurement::LidarId;
@@ -16,14 +14,7 @@ use crate::model::Motion;
 
 use crate::control::localize::{Failure, Procedure, Step};
 
-impl<F, R, C, S, L> Controller<F, R, C, S, L>
-where
-    F: crate::driver::RangeSensor,
-    R: crate::driver::RangeSensor,
-    C: HeadingSensor + MagCalibrate,
-    S: Servos,
-    L: RowLog,
-{
+impl<H: Hardware> Controller<H> {
     /// The power-up localization ([`cfg::AT_POWER_UP`]): `locate` as if
     /// typed (`# ok locate`). The firmware and the simulator call it once
     /// the sensors are up, with the loop started at the arena's centre

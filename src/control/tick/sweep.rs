@@ -4,24 +4,16 @@
 //! the config line to paste.
 
 use super::clock::Timer;
-use super::{Controller, LineSink, Mode};
+use super::{Controller, Hardware, LineSink, Mode};
 use crate::config;
-use crate::control::log::RowLog;
 use crate::control::protocol::number::push_str;
 use crate::control::protocol::response::{format_calibration_report, format_config_line};
-use crate::driver::{HeadingSensor, MagCalibrate, Servos};
+use crate::driver::MagCalibrate;
 use crate::math::TurnRate;
 use crate::model::compass::{CalibrationError, MagCalibration, MagCalibrator};
 use crate::model::Motion;
 
-impl<F, R, C, S, L> Controller<F, R, C, S, L>
-where
-    F: crate::driver::RangeSensor,
-    R: crate::driver::RangeSensor,
-    C: HeadingSensor + MagCalibrate,
-    S: Servos,
-    L: RowLog,
-{
+impl<H: Hardware> Controller<H> {
     /// Starts a sweep of `samples` samples (`cal`).
     pub(super) fn begin_sweep(&mut self, samples: u16) {
         let calibrator = MagCalibrator::new(

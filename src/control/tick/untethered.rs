@@ -4,7 +4,7 @@
 
 use super::clock::{ms_to_us, reached, Stamp, Timer};
 use super::health::Which;
-use super::{telemetry_period_us, Controller, LineSink, Mode};
+use super::{telemetry_period_us, Controller, Hardware, LineSink, Mode};
 use crate::config;
 use crate::control::goto::{check_target, position_steerable, Nav, NavStep, Refusal, Target};
 use crate::control::log::RowLog;
@@ -13,7 +13,7 @@ use crate::control::protocol::number::{div_rem_1000, push_fixed_parts, push_i32,
 use crate::control::protocol::{
     format_command, format_row, telemetry_header, Command, MissionOp, Response, TelemetryRow,
 };
-use crate::driver::{HeadingSensor, LidarSample, MagCalibrate, Servos};
+use crate::driver::LidarSample;
 use crate::math::{Angle, Length};
 use crate::model::{Motion, Range};
 
@@ -41,14 +41,7 @@ pub struct MissionRun {
     pub step: usize,
 }
 
-impl<F, R, C, S, L> Controller<F, R, C, S, L>
-where
-    F: crate::driver::RangeSensor,
-    R: crate::driver::RangeSensor,
-    C: HeadingSensor + MagCalibrate,
-    S: Servos,
-    L: RowLog,
-{
+impl<H: Hardware> Controller<H> {
     // ---- the mission and the log, for the board and tests -----------------
 
     /// The mission's steps.
@@ -68,7 +61,7 @@ where
     pub fn mission_run(&self) -> Option<MissionRun> {
         self.run
     }
-    pub fn log(&self) -> &L {
+    pub fn log(&self) -> &H::Log {
         &self.log
     }
 

@@ -2,14 +2,14 @@
 //! the `status` answer.
 
 use super::clock::{whole_ms, Stamp};
-use super::{Controller, Mode, SensorHealth};
+use super::{Controller, Hardware, Mode, SensorHealth};
 use crate::control::protocol::number::div_rem_1000;
 use crate::control::protocol::{FaultCounters, Status};
 use crate::driver::{CompassSample, LidarSample};
 use crate::model::estimator::Estimator;
 use crate::model::{ActuatorModel, Drive, Pose};
 
-impl<F, R, C, S, L> Controller<F, R, C, S, L> {
+impl<H: Hardware> Controller<H> {
     /// Loop clock in ms (wraps after 49 days: the truncation is intended).
     pub fn t_ms(&self) -> u32 {
         whole_ms(self.clock_us)
@@ -72,16 +72,16 @@ impl<F, R, C, S, L> Controller<F, R, C, S, L> {
     }
     /// The drivers, e.g. for a simulator that reads the servo commands or
     /// sets a fake chip's truth.
-    pub fn front(&mut self) -> &mut F {
+    pub fn front(&mut self) -> &mut H::Front {
         &mut self.front
     }
-    pub fn right(&mut self) -> &mut R {
+    pub fn right(&mut self) -> &mut H::Right {
         &mut self.right
     }
-    pub fn compass(&mut self) -> &mut C {
+    pub fn compass(&mut self) -> &mut H::Compass {
         &mut self.compass
     }
-    pub fn servos(&mut self) -> &mut S {
+    pub fn servos(&mut self) -> &mut H::Servos {
         &mut self.servos
     }
 
