@@ -56,30 +56,30 @@
 //! clock difference is wrapping or saturating, every index is checked.
 
 mod clock;
-mod health;
 mod locating;
 mod mode;
+mod sensor;
 mod sweep;
 mod untethered;
 mod views;
 
 use crate::config;
 use clock::{ms_to_us, reached, Stamp, Timer, OVERRUN_US};
-use health::Which;
+use sensor::{CompassSlot, LidarSlot, SensorSlot};
 
 use crate::control::protocol::{
     format_response, format_status, format_telemetry, telemetry_header, Command, FaultCounters, LineBuffer, OutLine,
     ParseError, Response, Side, Telemetry, HELP, MAX_OUT_LINE,
 };
-use crate::driver::{CompassSample, HeadingSensor, LidarSample, RangeSensor, Servos};
-use crate::math::{div_u64, Angle, Dt, Length};
+use crate::driver::{HeadingSensor, RangeSensor, Servos};
+use crate::math::{div_u64, Dt};
 use crate::model::compass::{CalStatus, MagCalibrator};
 use crate::model::estimator::{Estimator, Update};
 use crate::model::measurement::{Arena, LidarId};
 use crate::model::{advance, ActuatorModel, Drive, Motion, Pose};
 pub use clock::TICK_US;
-pub use health::SensorHealth;
 pub use mode::Mode;
+pub use sensor::SensorHealth;
 pub use untethered::{MissionPhase, MissionRun};
 
 pub use crate::control::hardware::Hardware;
@@ -105,18 +105,12 @@ pub struct Controller<H: Hardware> {
     /// A valid command arrived since the last tick.
     command_seen: bool,
     header_due: bool,
-    /// A reading came since the last telemetry row (it is in `last_*`).
-    fresh_front: bool,
-    fresh_right: bool,
-    fresh_compass: bool,
     /// The lidar corrected last, so the two take turns.
     front_went_last: bool,
     /// The sweep has all its samples (finished in the same tick).
     calibration_done: bool,
     /// A sensor was re-initialised in this tick (the others wait a tick).
     reinit_ran: bool,
-    /// Readings since the last log row (`untethered::LOG_*` bits).
-    log_fresh: u8,
     /// Loop clock, us since the first tick.
     clock_us: u64,
     /// The `now_us` of the previous tick (`None` before the first).
@@ -134,18 +128,6 @@ pub struct Controller<H: Hardware> {
     /// <= 1 s
     telemetry_period_us: u32,
     next_telemetry_us: Stamp,
-    /// Readings waiting for their estimator correction (see
-    /// `config::timing::MAX_CORRECTIONS_PER_TICK`).
-    pending_front: Option<Length>,
-    pending_right: Option<Length>,
-    pending_heading: Option<Angle>,
-    /// Newest readings (for the estimator and tests).
-    last_front: Option<LidarSample>,
-    last_right: Option<LidarSample>,
-    last_compass: Option<CompassSample>,
-    health_front: SensorHealth,
-    health_right: SensorHealth,
-    health_compass: SensorHealth,
     faults: FaultCounters,
     ticks: u64,
     /// The running magnetometer calibration sweep (in [`Mode::Calibrate`]).
@@ -160,9 +142,9 @@ pub struct Controller<H: Hardware> {
     dump_next: Option<usize>,
     /// The mission changed since [`Controller::take_mission_changed`].
     mission_changed: bool,
-    front: H::Front,
-    right: H::Right,
-    compass: H::Compass,
+    front: LidarSlot<H::Front>,
+    right: LidarSlot<H::Right>,
+    compass: CompassSlot<H::Compass>,
     servos: H::Servos,
     /// The actuator model with the run-time trims.
     model: ActuatorModel,
@@ -216,9 +198,9 @@ impl<H: Hardware> Controller<H> {
     ) -> Self {
         let model = config::actuators::MODEL;
         Controller {
-            front,
-            right,
-            compass,
+            front: SensorSlot::new(front),
+            right: SensorSlot::new(right),
+            compass: SensorSlot::new(compass),
             servos,
             model,
             input: LineBuffer::new(),
@@ -237,25 +219,12 @@ impl<H: Hardware> Controller<H> {
             telemetry_period_us: INITIAL_PERIOD_US,
             next_telemetry_us: 0,
             header_due: INITIAL_HZ != 0,
-            fresh_front: false,
-            fresh_right: false,
-            fresh_compass: false,
-            pending_front: None,
-            pending_right: None,
-            pending_heading: None,
             front_went_last: false,
-            last_front: None,
-            last_right: None,
-            last_compass: None,
-            health_front: SensorHealth::new(),
-            health_right: SensorHealth::new(),
-            health_compass: SensorHealth::new(),
             faults: FaultCounters::default(),
             ticks: 0,
             calibrator: None,
             calibration_done: false,
             reinit_ran: false,
-            log_fresh: 0,
             run: None,
             log_hz: config::log::HZ,
             log_period_us: telemetry_period_us(config::log::HZ),
@@ -464,40 +433,19 @@ impl<H: Hardware> Controller<H> {
 
     fn sense(&mut self, now: Stamp) {
         self.reinit_ran = false;
-        // Each sample is stored once, where it is kept (`last_*`; `fresh_*`
-        // flag it for the next row): at opt-level "z" a copy of a
-        // `CompassSample` is a `memcpy` call.
-        if self.ready(Which::Front, now) {
-            let polled = self.front.poll();
-            self.lidar_polled(Which::Front, polled, now);
+        let (ran, faults) = (&mut self.reinit_ran, &mut self.faults);
+        if self.front.ready(now, ran, faults, RangeSensor::reinit) {
+            let polled = self.front.driver.poll();
+            self.front.polled(polled, now, faults);
         }
-        if self.ready(Which::Right, now) {
-            let polled = self.right.poll();
-            self.lidar_polled(Which::Right, polled, now);
+        if self.right.ready(now, ran, faults, RangeSensor::reinit) {
+            let polled = self.right.driver.poll();
+            self.right.polled(polled, now, faults);
         }
-        if self.ready(Which::Compass, now) {
-            match self.compass.poll() {
-                Ok(s) => {
-                    self.sampled(Which::Compass, now);
-                    self.fresh_compass = true;
-                    self.log_fresh |= untethered::LOG_COMPASS;
-                    self.pending_heading = Some(s.heading);
-                    if let Some(cal) = self.calibrator.as_mut() {
-                        self.calibration_done = cal.feed(s.raw) == CalStatus::Done;
-                    }
-                    // tick bar: the field member by member (at opt-level
-                    // "z" a copy of the 12-byte `MagField` is a `memcpy` call)
-                    let f = s.field;
-                    let kept = self.last_compass.insert(CompassSample {
-                        raw: s.raw,
-                        field: Default::default(),
-                        heading: s.heading,
-                    });
-                    kept.field.x = f.x;
-                    kept.field.y = f.y;
-                    kept.field.z = f.z;
-                }
-                Err(e) => self.missed(Which::Compass, e, now),
+        if self.compass.ready(now, ran, faults, HeadingSensor::reinit) {
+            let polled = self.compass.driver.poll();
+            if let (Some(s), Some(cal)) = (self.compass.polled(polled, now, faults), self.calibrator.as_mut()) {
+                self.calibration_done = cal.feed(s.raw) == CalStatus::Done;
             }
         }
     }
@@ -505,16 +453,16 @@ impl<H: Hardware> Controller<H> {
     /// Applies one waiting reading to the estimator: a lidar first (the two
     /// take turns), else the compass. False when nothing waits.
     fn correct_one(&mut self) -> bool {
-        let front_first = !self.front_went_last || self.pending_right.is_none();
-        let lidar = if front_first && self.pending_front.is_some() {
-            self.pending_front.take().map(|d| (LidarId::Front, d))
+        let front_first = !self.front_went_last || self.right.pending.is_none();
+        let lidar = if front_first && self.front.pending.is_some() {
+            self.front.pending.take().map(|d| (LidarId::Front, d))
         } else {
-            self.pending_right.take().map(|d| (LidarId::Right, d))
+            self.right.pending.take().map(|d| (LidarId::Right, d))
         };
         let u = if let Some((id, d)) = lidar {
             self.front_went_last = id == LidarId::Front;
             self.estimator.update_lidar(id, d)
-        } else if let Some(h) = self.pending_heading.take() {
+        } else if let Some(h) = self.compass.pending.take() {
             self.estimator.update_heading(h)
         } else {
             return false;
@@ -614,9 +562,9 @@ impl<H: Hardware> Controller<H> {
             self.next_telemetry_us = now.wrapping_add(self.telemetry_period_us);
         }
         let fresh = [
-            core::mem::take(&mut self.fresh_front),
-            core::mem::take(&mut self.fresh_right),
-            core::mem::take(&mut self.fresh_compass),
+            core::mem::take(&mut self.front.unreported),
+            core::mem::take(&mut self.right.unreported),
+            core::mem::take(&mut self.compass.unreported),
         ];
         let t = self.snapshot(fresh);
         self.out.clear();
@@ -633,9 +581,9 @@ impl<H: Hardware> Controller<H> {
         Telemetry {
             t_ms: self.t_ms(),
             pose: self.estimator.pose(),
-            front: self.last_front.filter(|_| front),
-            right: self.last_right.filter(|_| right),
-            compass: self.last_compass.filter(|_| compass),
+            front: self.front.latest.filter(|_| front),
+            right: self.right.latest.filter(|_| right),
+            compass: self.compass.latest.filter(|_| compass),
             motion: self.applied.motion,
             left_cmd: self.applied.left,
             right_cmd: self.applied.right,

@@ -35,13 +35,13 @@ impl<H: Hardware> Controller<H> {
     /// (the estimator starts afresh from its fix).
     pub(super) fn take_view_readings(&mut self) {
         let p = &mut self.locating;
-        if let Some(d) = self.pending_front.take() {
+        if let Some(d) = self.front.pending.take() {
             p.lidar(LidarId::Front, d);
         }
-        if let Some(d) = self.pending_right.take() {
+        if let Some(d) = self.right.pending.take() {
             p.lidar(LidarId::Right, d);
         }
-        if let Some(h) = self.pending_heading.take() {
+        if let Some(h) = self.compass.pending.take() {
             p.heading(h);
         }
     }

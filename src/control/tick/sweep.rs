@@ -17,7 +17,7 @@ impl<H: Hardware> Controller<H> {
     /// Starts a sweep of `samples` samples (`cal`).
     pub(super) fn begin_sweep(&mut self, samples: u16) {
         let calibrator = MagCalibrator::new(
-            self.compass.asa(),
+            self.compass.driver.asa(),
             config::compass::AXES,
             samples,
             config::compass::CALIBRATION_MIN_SECTORS,
@@ -51,7 +51,7 @@ impl<H: Hardware> Controller<H> {
             self.mode = Mode::Idle;
         }
         if let Some(Ok(cal)) = result {
-            self.compass.set_calibration(cal);
+            self.compass.driver.set_calibration(cal);
         }
         // Integer formatting (no core::fmt on the robot), straight into the
         // output line: every text here is printable ASCII, as `Response::Note`

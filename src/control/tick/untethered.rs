@@ -3,7 +3,6 @@
 //! received byte) and the on-board log with its `dump`.
 
 use super::clock::{ms_to_us, reached, Stamp, Timer};
-use super::health::Which;
 use super::{telemetry_period_us, Controller, Hardware, LineSink, Mode};
 use crate::config;
 use crate::control::goto::{check_target, position_steerable, Nav, NavStep, Refusal, Target};
@@ -13,14 +12,8 @@ use crate::control::protocol::number::{div_rem_1000, push_fixed_parts, push_i32,
 use crate::control::protocol::{
     format_command, format_row, telemetry_header, Command, MissionOp, Response, TelemetryRow,
 };
-use crate::driver::LidarSample;
 use crate::math::{Angle, Length};
-use crate::model::{Motion, Range};
-
-/// [`Controller`]'s `log_fresh` bits: a reading came since the last log row.
-pub(super) const LOG_FRONT: u8 = 1;
-pub(super) const LOG_RIGHT: u8 = 2;
-pub(super) const LOG_COMPASS: u8 = 4;
+use crate::model::Motion;
 
 /// Where a mission is.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
@@ -257,7 +250,9 @@ impl<H: Hardware> Controller<H> {
                     run.since_us = Some(now);
                     self.log.clear();
                     self.next_log_us = now;
-                    self.log_fresh = 0;
+                    self.front.unlogged = false;
+                    self.right.unlogged = false;
+                    self.compass.unlogged = false;
                     self.respond(&Response::Note("mission: go"), sink);
                 }
                 return;
@@ -349,14 +344,7 @@ impl<H: Hardware> Controller<H> {
     /// The front lidar's distance if it read a target lately (too close
     /// to measure is 0).
     fn front_distance(&self, now: Stamp) -> Option<Length> {
-        if !self.is_fresh(Which::Front, now) {
-            return None;
-        }
-        match self.last_front {
-            Some(LidarSample { range: Range::Target(d), .. }) => Some(d),
-            Some(LidarSample { range: Range::TooClose, .. }) => Some(Length::ZERO),
-            _ => None,
-        }
+        self.front.distance(now)
     }
 
     /// A forward motion: stops it near a wall (and, untethered, without a
@@ -365,7 +353,7 @@ impl<H: Hardware> Controller<H> {
         let untethered = self.run.is_some() || matches!(self.mode, Mode::Goto { .. });
         match self.front_distance(now) {
             Some(d) if d < Length::from_mm(config::goto::WALL_STOP_MM) => self.halt("wall ahead", now, sink),
-            None if untethered && !self.is_fresh(Which::Front, now) => self.halt("front lidar silent", now, sink),
+            None if untethered && !self.front.is_fresh(now) => self.halt("front lidar silent", now, sink),
             _ => {}
         }
     }
@@ -417,8 +405,12 @@ impl<H: Hardware> Controller<H> {
         if reached(now, self.next_log_us) {
             self.next_log_us = now.wrapping_add(self.log_period_us);
         }
-        let fresh = core::mem::take(&mut self.log_fresh);
-        let t = self.snapshot([fresh & LOG_FRONT != 0, fresh & LOG_RIGHT != 0, fresh & LOG_COMPASS != 0]);
+        let fresh = [
+            core::mem::take(&mut self.front.unlogged),
+            core::mem::take(&mut self.right.unlogged),
+            core::mem::take(&mut self.compass.unlogged),
+        ];
+        let t = self.snapshot(fresh);
         self.log.push(&TelemetryRow::from(&t));
     }
 }

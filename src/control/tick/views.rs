@@ -53,33 +53,33 @@ impl<H: Hardware> Controller<H> {
         self.ticks
     }
     pub fn front_health(&self) -> SensorHealth {
-        self.health_front
+        self.front.health
     }
     pub fn right_health(&self) -> SensorHealth {
-        self.health_right
+        self.right.health
     }
     pub fn compass_health(&self) -> SensorHealth {
-        self.health_compass
+        self.compass.health
     }
     pub fn last_front(&self) -> Option<LidarSample> {
-        self.last_front
+        self.front.latest
     }
     pub fn last_right(&self) -> Option<LidarSample> {
-        self.last_right
+        self.right.latest
     }
     pub fn last_compass(&self) -> Option<CompassSample> {
-        self.last_compass
+        self.compass.latest
     }
     /// The drivers, e.g. for a simulator that reads the servo commands or
     /// sets a fake chip's truth.
     pub fn front(&mut self) -> &mut H::Front {
-        &mut self.front
+        &mut self.front.driver
     }
     pub fn right(&mut self) -> &mut H::Right {
-        &mut self.right
+        &mut self.right.driver
     }
     pub fn compass(&mut self) -> &mut H::Compass {
-        &mut self.compass
+        &mut self.compass.driver
     }
     pub fn servos(&mut self) -> &mut H::Servos {
         &mut self.servos
@@ -100,9 +100,9 @@ impl<H: Hardware> Controller<H> {
             left_trim: self.model.left_trim,
             right_trim: self.model.right_trim,
             rate_hz: self.telemetry_hz,
-            front_ok: self.health_front.up,
-            right_ok: self.health_right.up,
-            compass_ok: self.health_compass.up,
+            front_ok: self.front.health.up,
+            right_ok: self.right.health.up,
+            compass_ok: self.compass.health.up,
             faults: self.faults,
         }
     }
