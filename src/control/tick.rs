@@ -73,7 +73,6 @@ use crate::control::protocol::{
 };
 use crate::driver::{HeadingSensor, RangeSensor, Servos};
 use crate::math::{div_u64, Dt};
-use crate::model::compass::{CalStatus, MagCalibrator};
 use crate::model::estimator::{Estimator, Update};
 use crate::model::measurement::{Arena, LidarId};
 use crate::model::{advance, ActuatorModel, Drive, Motion, Pose};
@@ -107,8 +106,6 @@ pub struct Controller<H: Hardware> {
     header_due: bool,
     /// The lidar corrected last, so the two take turns.
     front_went_last: bool,
-    /// The sweep has all its samples (finished in the same tick).
-    calibration_done: bool,
     /// A sensor was re-initialised in this tick (the others wait a tick).
     reinit_ran: bool,
     /// Loop clock, us since the first tick.
@@ -130,8 +127,6 @@ pub struct Controller<H: Hardware> {
     next_telemetry_us: Stamp,
     faults: FaultCounters,
     ticks: u64,
-    /// The running magnetometer calibration sweep (in [`Mode::Calibrate`]).
-    calibrator: Option<MagCalibrator>,
     /// The running mission, if any.
     run: Option<MissionRun>,
     /// The on-board log's rate (0 = off) and schedule.
@@ -222,8 +217,6 @@ impl<H: Hardware> Controller<H> {
             front_went_last: false,
             faults: FaultCounters::default(),
             ticks: 0,
-            calibrator: None,
-            calibration_done: false,
             reinit_ran: false,
             run: None,
             log_hz: config::log::HZ,
@@ -444,8 +437,9 @@ impl<H: Hardware> Controller<H> {
         }
         if self.compass.ready(now, ran, faults, HeadingSensor::reinit) {
             let polled = self.compass.driver.poll();
-            if let (Some(s), Some(cal)) = (self.compass.polled(polled, now, faults), self.calibrator.as_mut()) {
-                self.calibration_done = cal.feed(s.raw) == CalStatus::Done;
+            if let (Some(s), Mode::Calibrate { sweep, .. }) = (self.compass.polled(polled, now, faults), &mut self.mode)
+            {
+                sweep.feed(s.raw);
             }
         }
     }
@@ -478,9 +472,11 @@ impl<H: Hardware> Controller<H> {
     }
 
     fn decide(&mut self, now: Stamp, sink: &mut impl LineSink) {
-        if core::mem::take(&mut self.calibration_done) {
-            self.finish_sweep(sink);
-            return;
+        if let Mode::Calibrate { sweep, .. } = &mut self.mode {
+            if sweep.take_done() {
+                self.finish_sweep(sink);
+                return;
+            }
         }
         if let Some(timer) = self.mode.timer().copied() {
             self.timeout(timer, now, sink);

@@ -3,6 +3,7 @@
 //! where it is, each with its timer.
 
 use super::clock::Timer;
+use super::sweep::Sweep;
 use crate::control::goto::{Nav, Target};
 use crate::model::{Drive, Motion, ServoCmd};
 
@@ -16,8 +17,9 @@ pub enum Mode {
     Drive { drive: Drive, timer: Timer },
     /// Raw servo commands; `motion` is what the forward model says they do.
     Servo { left: ServoCmd, right: ServoCmd, motion: Motion, timer: Timer },
-    /// Turning in place while the magnetometer calibration collects samples.
-    Calibrate { drive: Drive, timer: Timer },
+    /// Turning in place while the magnetometer calibration sweep collects
+    /// samples.
+    Calibrate { drive: Drive, timer: Timer, sweep: Sweep },
     /// `goto` or `face`: `drive` is this tick's leg (see `control::goto`),
     /// the timer its time limit.
     Goto { nav: Nav, drive: Drive, timer: Timer },

@@ -1,7 +1,7 @@
-//! The loop's magnetometer calibration sweep (`cal`): it turns in place
-//! while the compass's raw samples feed a [`MagCalibrator`]; when it has
-//! them (or its time is up) the new calibration is applied and printed as
-//! the config line to paste.
+//! The magnetometer calibration sweep (`cal`), the state of
+//! [`Mode::Calibrate`]: it turns in place while the compass's raw samples
+//! feed a [`MagCalibrator`]; when it has them (or its time is up) the new
+//! calibration is applied and printed as the config line to paste.
 
 use super::clock::Timer;
 use super::{Controller, Hardware, LineSink, Mode};
@@ -10,8 +10,27 @@ use crate::control::protocol::number::push_str;
 use crate::control::protocol::response::{format_calibration_report, format_config_line};
 use crate::driver::MagCalibrate;
 use crate::math::TurnRate;
-use crate::model::compass::{CalibrationError, MagCalibration, MagCalibrator};
+use crate::model::compass::{CalStatus, CalibrationError, MagCalibration, MagCalibrator, MagCounts};
 use crate::model::Motion;
+
+/// A sweep under way.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub struct Sweep {
+    calibrator: MagCalibrator,
+    /// It has all its samples (it ends in the tick that got the last).
+    done: bool,
+}
+
+impl Sweep {
+    /// Feeds one raw compass sample.
+    pub(super) fn feed(&mut self, raw: MagCounts) {
+        self.done = self.calibrator.feed(raw) == CalStatus::Done;
+    }
+    /// True once, in the tick the sweep got its last sample.
+    pub(super) fn take_done(&mut self) -> bool {
+        core::mem::take(&mut self.done)
+    }
+}
 
 impl<H: Hardware> Controller<H> {
     /// Starts a sweep of `samples` samples (`cal`).
@@ -23,17 +42,23 @@ impl<H: Hardware> Controller<H> {
             config::compass::CALIBRATION_MIN_SECTORS,
             config::compass::CALIBRATION_MIN_RADIUS,
         );
-        self.calibrator = Some(calibrator);
         let turn = Motion::Turn(TurnRate::from_mrad_s(config::compass::CALIBRATION_TURN_MRAD_S));
         // max_samples <= u16::MAX: the product fits in u32 (asserted at MAX_SPAN_MS)
         let limit_ms = u32::from(calibrator.max_samples()) * config::compass::CALIBRATION_MS_PER_SAMPLE;
-        self.mode = Mode::Calibrate { drive: self.model.drive(turn), timer: Timer::new(Some(limit_ms)) };
+        self.mode = Mode::Calibrate {
+            drive: self.model.drive(turn),
+            timer: Timer::new(Some(limit_ms)),
+            sweep: Sweep { calibrator, done: false },
+        };
     }
 
     /// Ends the running sweep with its result (its samples are in, or its
     /// time is up).
     pub(super) fn finish_sweep(&mut self, sink: &mut impl LineSink) {
-        let result = self.calibrator.as_ref().map(MagCalibrator::result);
+        let result = match &self.mode {
+            Mode::Calibrate { sweep, .. } => Some(sweep.calibrator.result()),
+            _ => None,
+        };
         self.end_calibration(result, sink);
     }
 
@@ -44,9 +69,10 @@ impl<H: Hardware> Controller<H> {
         result: Option<Result<MagCalibration, CalibrationError>>,
         sink: &mut impl LineSink,
     ) {
-        let (samples, sectors) = self.calibrator.map(|c| (c.samples(), c.sectors())).unwrap_or((0, 0));
-        self.calibrator = None;
-        self.calibration_done = false;
+        let (samples, sectors) = match &self.mode {
+            Mode::Calibrate { sweep, .. } => (sweep.calibrator.samples(), sweep.calibrator.sectors()),
+            _ => (0, 0),
+        };
         if matches!(self.mode, Mode::Calibrate { .. }) {
             self.mode = Mode::Idle;
         }
