@@ -56,34 +56,36 @@
 //! clock difference is wrapping or saturating, every index is checked.
 
 mod clock;
+mod commands;
 mod locating;
+mod mission_run;
 mod mode;
+mod navigate;
+mod report;
 mod sensor;
 mod sweep;
-mod untethered;
 mod views;
 
 use crate::config;
-use clock::{ms_to_us, reached, Stamp, Timer, OVERRUN_US};
+use clock::{ms_to_us, Stamp, Timer, OVERRUN_US};
 use sensor::{CompassSlot, LidarSlot, SensorSlot};
 
-use crate::control::protocol::{
-    format_response, format_status, format_telemetry, telemetry_header, Command, FaultCounters, LineBuffer, OutLine,
-    ParseError, Response, Side, Telemetry, HELP, MAX_OUT_LINE,
-};
+use crate::control::protocol::{FaultCounters, LineBuffer, OutLine, Response, MAX_OUT_LINE};
 use crate::driver::{HeadingSensor, RangeSensor, Servos};
-use crate::math::{div_u64, Dt};
+use crate::math::Dt;
 use crate::model::estimator::{Estimator, Update};
 use crate::model::measurement::{Arena, LidarId};
 use crate::model::{advance, ActuatorModel, Drive, Motion, Pose};
 pub use clock::TICK_US;
+use locating::Localizing;
+use mission_run::Missions;
+pub use mission_run::{MissionPhase, MissionRun};
 pub use mode::Mode;
+use report::Reports;
 pub use sensor::SensorHealth;
-pub use untethered::{MissionPhase, MissionRun};
 
 pub use crate::control::hardware::Hardware;
-use crate::control::localize::{Failure, Procedure};
-use crate::control::mission::Mission;
+use crate::control::localize::Failure;
 
 /// Where the loop writes its output lines (without terminators): the UART
 /// on the robot, a `Vec<String>` in tests, a channel in the simulator.
@@ -103,7 +105,6 @@ pub struct Controller<H: Hardware> {
     // buffers go last.
     /// A valid command arrived since the last tick.
     command_seen: bool,
-    header_due: bool,
     /// The lidar corrected last, so the two take turns.
     front_went_last: bool,
     /// A sensor was re-initialised in this tick (the others wait a tick).
@@ -121,22 +122,10 @@ pub struct Controller<H: Hardware> {
     estimator: Estimator,
     /// Dead-reckoned pose (the state update alone).
     dead: Pose,
-    telemetry_hz: u16,
-    /// <= 1 s
-    telemetry_period_us: u32,
-    next_telemetry_us: Stamp,
     faults: FaultCounters,
     ticks: u64,
-    /// The running mission, if any.
-    run: Option<MissionRun>,
-    /// The on-board log's rate (0 = off) and schedule.
-    log_hz: u16,
-    log_period_us: u32,
-    next_log_us: Stamp,
-    /// The next log row `dump` sends (while it is sending).
-    dump_next: Option<usize>,
-    /// The mission changed since [`Controller::take_mission_changed`].
-    mission_changed: bool,
+    /// Telemetry, the on-board log's rows and `dump`: when they are due.
+    reports: Reports,
     front: LidarSlot<H::Front>,
     right: LidarSlot<H::Right>,
     compass: CompassSlot<H::Compass>,
@@ -145,13 +134,10 @@ pub struct Controller<H: Hardware> {
     model: ActuatorModel,
     input: LineBuffer,
     out: OutLine<MAX_OUT_LINE>,
-    // tick bar: the mission, the localization procedure and the log are
-    // large and off the tick's path: last
-    mission: Mission,
-    /// The localization procedure (its state while in [`Mode::Locate`]).
-    locating: Procedure,
-    /// The `goto` or `face` that waits for the localization's fix.
-    after_locate: Option<Command>,
+    /// The mission and its run.
+    missions: Missions,
+    /// The localization (the state of [`Mode::Locate`]).
+    locating: Localizing,
     log: H::Log,
 }
 
@@ -208,145 +194,14 @@ impl<H: Hardware> Controller<H> {
             applied: model.stop(),
             estimator: Estimator::with_arena(pose, arena),
             dead: pose,
-            // the config's rate, as `set_rate` would set it: the first row
-            // (after the header) at the first tick
-            telemetry_hz: INITIAL_HZ,
-            telemetry_period_us: INITIAL_PERIOD_US,
-            next_telemetry_us: 0,
-            header_due: INITIAL_HZ != 0,
+            reports: Reports::new(),
             front_went_last: false,
             faults: FaultCounters::default(),
             ticks: 0,
             reinit_ran: false,
-            run: None,
-            log_hz: config::log::HZ,
-            log_period_us: telemetry_period_us(config::log::HZ),
-            next_log_us: 0,
-            dump_next: None,
-            mission_changed: false,
-            mission: Mission::new(),
-            locating: Procedure::new(),
-            after_locate: None,
+            missions: Missions::new(),
+            locating: Localizing::new(),
             log,
-        }
-    }
-
-    // ---- inputs ------------------------------------------------------
-
-    /// Takes one received serial byte; a finished line is parsed and
-    /// handled at once (its answer goes to `sink`).
-    pub fn feed(&mut self, byte: u8, sink: &mut impl LineSink) {
-        self.byte_received(sink);
-        match self.input.push(byte) {
-            None => {}
-            Some(Err(e)) => self.respond(&Response::Err(e), sink),
-            Some(Ok(line)) => match line.parse() {
-                Ok(cmd) => self.handle(cmd, sink),
-                Err(ParseError::Empty) => {}
-                Err(e) => self.respond(&Response::Err(e), sink),
-            },
-        }
-    }
-
-    /// [`Controller::feed`] for each byte.
-    pub fn feed_bytes(&mut self, bytes: &[u8], sink: &mut impl LineSink) {
-        for &b in bytes {
-            self.feed(b, sink);
-        }
-    }
-
-    /// Carries out one parsed command and answers `# ok <command>` (for a
-    /// motion the servos cannot drive as asked, the motion they drive).
-    pub fn handle(&mut self, cmd: Command, sink: &mut impl LineSink) {
-        self.command_seen = true;
-        self.command_received(sink);
-        // a command ends a sweep or a localization (it runs instead)
-        if !matches!(cmd, Command::Status | Command::Help | Command::Rate { .. }) {
-            match self.mode {
-                Mode::Calibrate { .. } => self.end_calibration(None, sink),
-                Mode::Locate { .. } => self.end_locate(Err(Failure::Interrupted), sink),
-                _ => {}
-            }
-        }
-        // a motion, a goto or face (which may be refused) and a mission
-        // start answer for themselves
-        if !matches!(cmd, Command::Drive { .. } | Command::Goto { .. } | Command::Face { .. } | Command::Mission(_)) {
-            self.respond(&Response::Ok(&cmd), sink);
-        }
-        match cmd {
-            Command::Drive { motion, duration_ms } => {
-                let drive = self.model.drive(motion);
-                self.mode = Mode::Drive { drive, timer: Timer::new(duration_ms) };
-                // a motion outside what the servos drive is driven at the
-                // nearest they can, and the answer says so: `fwd 0.05` -> `# ok fwd 0.124`
-                let driven = if drive.saturated { Command::Drive { motion: drive.motion, duration_ms } } else { cmd };
-                self.respond(&Response::Ok(&driven), sink);
-            }
-            Command::Stop => {
-                self.mode = Mode::Idle;
-            }
-            Command::Servo { left, right, duration_ms } => {
-                let motion = self.model.motion_from_commands(left, right);
-                self.mode = Mode::Servo { left, right, motion, timer: Timer::new(duration_ms) };
-            }
-            Command::Trim { side, trim } => {
-                match side {
-                    Side::Left => self.model.left_trim = trim,
-                    Side::Right => self.model.right_trim = trim,
-                }
-                // the neutral moved: recompute a running drive's commands
-                if let Mode::Drive { drive, .. } = &mut self.mode {
-                    *drive = self.model.drive(drive.motion);
-                }
-            }
-            Command::SetPose { x_mm, y_mm, heading } => self.set_pose(Pose::from_mm(x_mm, y_mm, heading)),
-            Command::Calibrate { samples } => self.begin_sweep(samples),
-            Command::Rate { hz } => {
-                self.set_rate(hz);
-            }
-            Command::Status => {
-                let status = self.status();
-                self.out.clear();
-                if format_status(&status, &mut self.out).is_ok() {
-                    sink.write_line(&self.out);
-                }
-            }
-            Command::Help => {
-                for line in HELP {
-                    sink.write_line(line);
-                }
-            }
-            Command::Goto { .. } | Command::Face { .. } | Command::Wait { .. } => self.begin(&cmd, true, sink),
-            Command::Mission(op) => self.mission_op(op, &cmd, sink),
-            Command::Log { hz } => self.set_log_rate(hz),
-            Command::Dump => self.start_dump(sink),
-            Command::Locate => self.begin_locate(),
-        }
-    }
-
-    /// Sets the estimate (and the dead-reckoned pose) to `pose`.
-    fn set_pose(&mut self, pose: Pose) {
-        self.estimator.reset(pose);
-        self.dead = pose;
-    }
-
-    fn respond(&mut self, r: &Response, sink: &mut impl LineSink) {
-        self.out.clear();
-        if format_response(r, &mut self.out).is_ok() {
-            sink.write_line(&self.out);
-        }
-    }
-
-    fn set_rate(&mut self, hz: u16) {
-        let was_off = self.telemetry_hz == 0;
-        self.telemetry_hz = hz;
-        // hz = 0 (off) gives period 0
-        // <= 1_000_000: fits
-        self.telemetry_period_us = telemetry_period_us(hz);
-        // the first row at the next tick (after the header if telemetry was off)
-        self.next_telemetry_us = self.clock_us as Stamp;
-        if hz != 0 && was_off {
-            self.header_due = true;
         }
     }
 
@@ -403,7 +258,7 @@ impl<H: Hardware> Controller<H> {
 
         // 6. telemetry (and in a mission the on-board log)
         self.telemetry(now, sink);
-        if self.run.is_some() {
+        if self.missions.run.is_some() {
             self.log_row(now);
         }
     }
@@ -411,7 +266,7 @@ impl<H: Hardware> Controller<H> {
     /// Integrates `motion` over `dt_us` in steps of at most [`Dt::MAX`]
     /// (a late tick of up to a second is integrated in full; beyond that
     /// the robot has stopped by the deadman anyway).
-    fn advance(&mut self, motion: Motion, dt_us: u32) {
+    pub(super) fn advance(&mut self, motion: Motion, dt_us: u32) {
         const MAX_STEPS: u32 = 16; // 16 * 65.5 ms > 1 s
         let mut left = dt_us;
         let mut n = 0;
@@ -424,7 +279,7 @@ impl<H: Hardware> Controller<H> {
         }
     }
 
-    fn sense(&mut self, now: Stamp) {
+    pub(super) fn sense(&mut self, now: Stamp) {
         self.reinit_ran = false;
         let (ran, faults) = (&mut self.reinit_ran, &mut self.faults);
         if self.front.ready(now, ran, faults, RangeSensor::reinit) {
@@ -446,7 +301,7 @@ impl<H: Hardware> Controller<H> {
 
     /// Applies one waiting reading to the estimator: a lidar first (the two
     /// take turns), else the compass. False when nothing waits.
-    fn correct_one(&mut self) -> bool {
+    pub(super) fn correct_one(&mut self) -> bool {
         let front_first = !self.front_went_last || self.right.pending.is_none();
         let lidar = if front_first && self.front.pending.is_some() {
             self.front.pending.take().map(|d| (LidarId::Front, d))
@@ -465,13 +320,13 @@ impl<H: Hardware> Controller<H> {
         true
     }
 
-    fn count_update(&mut self, u: Update) {
+    pub(super) fn count_update(&mut self, u: Update) {
         if u == Update::Outlier {
             self.faults.rejected_outliers = self.faults.rejected_outliers.saturating_add(1);
         }
     }
 
-    fn decide(&mut self, now: Stamp, sink: &mut impl LineSink) {
+    pub(super) fn decide(&mut self, now: Stamp, sink: &mut impl LineSink) {
         if let Mode::Calibrate { sweep, .. } = &mut self.mode {
             if sweep.take_done() {
                 self.finish_sweep(sink);
@@ -483,7 +338,7 @@ impl<H: Hardware> Controller<H> {
         }
         // tick bar: the untethered checks cost a few compares when no
         // mission, goto or forward motion runs
-        if self.run.is_some() {
+        if self.missions.run.is_some() {
             self.supervise(now, sink);
         }
         match self.mode {
@@ -504,7 +359,7 @@ impl<H: Hardware> Controller<H> {
     }
 
     /// A mode's timer: its end, or the deadman for an untimed one.
-    fn timeout(&mut self, timer: Timer, now: Stamp, sink: &mut impl LineSink) {
+    pub(super) fn timeout(&mut self, timer: Timer, now: Stamp, sink: &mut impl LineSink) {
         match timer.remaining_us(now) {
             Some(0) if matches!(self.mode, Mode::Calibrate { .. }) => {
                 self.finish_sweep(sink);
@@ -530,7 +385,7 @@ impl<H: Hardware> Controller<H> {
     }
 
     /// The servo commands and motion of the current mode.
-    fn current_drive(&self) -> Drive {
+    pub(super) fn current_drive(&self) -> Drive {
         match self.mode {
             Mode::Idle | Mode::Wait { .. } => self.model.stop(),
             Mode::Drive { drive, .. }
@@ -539,68 +394,5 @@ impl<H: Hardware> Controller<H> {
             | Mode::Locate { drive, .. } => drive,
             Mode::Servo { left, right, motion, .. } => Drive { left, right, motion, saturated: false },
         }
-    }
-
-    fn telemetry(&mut self, now: Stamp, sink: &mut impl LineSink) {
-        if self.dump_next.is_some() {
-            // the log's rows go out instead (telemetry would mix with them)
-            return self.dump_rows(sink);
-        }
-        if self.telemetry_hz == 0 || !reached(now, self.next_telemetry_us) {
-            return;
-        }
-        if core::mem::take(&mut self.header_due) {
-            sink.write_line(telemetry_header());
-        }
-        // keep the schedule; after a stall, start again from now
-        self.next_telemetry_us = self.next_telemetry_us.wrapping_add(self.telemetry_period_us);
-        if reached(now, self.next_telemetry_us) {
-            self.next_telemetry_us = now.wrapping_add(self.telemetry_period_us);
-        }
-        let fresh = [
-            core::mem::take(&mut self.front.unreported),
-            core::mem::take(&mut self.right.unreported),
-            core::mem::take(&mut self.compass.unreported),
-        ];
-        let t = self.snapshot(fresh);
-        self.out.clear();
-        if format_telemetry(&t, &mut self.out).is_ok() {
-            sink.write_line(&self.out);
-        }
-    }
-}
-
-impl<H: Hardware> Controller<H> {
-    /// A telemetry row's values now, with the readings flagged fresh
-    /// (front, right, compass).
-    fn snapshot(&self, [front, right, compass]: [bool; 3]) -> Telemetry {
-        Telemetry {
-            t_ms: self.t_ms(),
-            pose: self.estimator.pose(),
-            front: self.front.latest.filter(|_| front),
-            right: self.right.latest.filter(|_| right),
-            compass: self.compass.latest.filter(|_| compass),
-            motion: self.applied.motion,
-            left_cmd: self.applied.left,
-            right_cmd: self.applied.right,
-            faults: self.faults,
-        }
-    }
-}
-
-const _: () = assert!(config::timing::TELEMETRY_HZ <= config::serial::MAX_TELEMETRY_HZ as u32);
-/// The telemetry rate a new loop starts at (`config::timing::TELEMETRY_HZ`,
-/// asserted above to fit the protocol's range) and its period, us (0 = off,
-/// as [`Controller::set_rate`] gives).
-const INITIAL_HZ: u16 = config::timing::TELEMETRY_HZ as u16;
-const INITIAL_PERIOD_US: u32 = telemetry_period_us(INITIAL_HZ);
-
-/// The period of a telemetry rate, us: 0 for 0 Hz (off), else at most 1 s
-/// (fits). [`div_u64`] stays a call: a division the compiler sees as 32-bit
-/// would link compiler_builtins' `__udivsi3`, which the ROM file leaves out.
-const fn telemetry_period_us(hz: u16) -> u32 {
-    match div_u64(1_000_000, hz as u64) {
-        Some(q) => q as u32,
-        None => 0,
     }
 }

@@ -13,6 +13,21 @@ use crate::model::measurement::LidarId;
 use crate::model::Motion;
 
 use crate::control::localize::{Failure, Procedure, Step};
+use crate::control::protocol::Command;
+
+/// A localization under way (the state of [`Mode::Locate`]).
+pub(super) struct Localizing {
+    /// Its views so far, and what it does next.
+    pub procedure: Procedure,
+    /// The `goto` or `face` that waits for its fix.
+    pub then: Option<Command>,
+}
+
+impl Localizing {
+    pub const fn new() -> Localizing {
+        Localizing { procedure: Procedure::new(), then: None }
+    }
+}
 
 impl<H: Hardware> Controller<H> {
     /// The power-up localization ([`cfg::AT_POWER_UP`]): `locate` as if
@@ -20,21 +35,20 @@ impl<H: Hardware> Controller<H> {
     /// the sensors are up, with the loop started at the arena's centre
     /// ([`crate::model::measurement::Arena::centre`]).
     pub fn power_up(&mut self, sink: &mut impl LineSink) {
-        self.handle(crate::control::protocol::Command::Locate, sink);
+        self.handle(Command::Locate, sink);
     }
 
     /// Starts the procedure (`locate`, `reset`, and at power-up): the
     /// robot stands for its first view.
     pub(super) fn begin_locate(&mut self) {
-        self.locating = Procedure::new();
-        self.after_locate = None;
+        self.locating = Localizing::new();
         self.mode = Mode::Locate { drive: self.model.stop(), timer: Timer::new(Some(cfg::TIME_LIMIT_MS)) };
     }
 
     /// While locating, this tick's readings go to the procedure's view
     /// (the estimator starts afresh from its fix).
     pub(super) fn take_view_readings(&mut self) {
-        let p = &mut self.locating;
+        let p = &mut self.locating.procedure;
         if let Some(d) = self.front.pending.take() {
             p.lidar(LidarId::Front, d);
         }
@@ -48,7 +62,7 @@ impl<H: Hardware> Controller<H> {
 
     /// One tick of the procedure: stand, turn, or its answer.
     pub(super) fn locate_tick(&mut self, sink: &mut impl LineSink) {
-        let motion = match self.locating.tick(&self.estimator.arena()) {
+        let motion = match self.locating.procedure.tick(&self.estimator.arena()) {
             Step::Done(result) => return self.end_locate(result, sink),
             Step::Stand => Motion::Stop,
             Step::Turn { clockwise } => {
@@ -72,9 +86,8 @@ impl<H: Hardware> Controller<H> {
         if matches!(self.mode, Mode::Locate { .. }) {
             self.mode = Mode::Idle;
         }
-        let views = self.locating.views().len();
-        self.locating = Procedure::new();
-        let then = self.after_locate.take();
+        let views = self.locating.procedure.views().len();
+        let then = core::mem::replace(&mut self.locating, Localizing::new()).then;
         match result {
             Ok(fix) => {
                 self.estimator.start_at(&fix);
@@ -101,7 +114,7 @@ impl<H: Hardware> Controller<H> {
     }
 
     /// `# located x y heading sigma sx sy views n [ambiguous]`: mm, degrees.
-    fn report_fix(&mut self, fix: &Fix, views: usize, sink: &mut impl LineSink) {
+    pub(super) fn report_fix(&mut self, fix: &Fix, views: usize, sink: &mut impl LineSink) {
         let mm = |l: crate::math::Length| l.0 >> 16;
         let o = &mut self.out;
         o.clear();

@@ -34,7 +34,7 @@ impl<H: Hardware> Controller<H> {
     }
     /// The localization procedure (its views so far while locating).
     pub fn locating(&self) -> &crate::control::localize::Procedure {
-        &self.locating
+        &self.locating.procedure
     }
     /// The servo commands and motion set at the last tick.
     pub fn applied(&self) -> Drive {
@@ -47,7 +47,7 @@ impl<H: Hardware> Controller<H> {
         self.faults
     }
     pub fn telemetry_hz(&self) -> u16 {
-        self.telemetry_hz
+        self.reports.telemetry.hz
     }
     pub fn ticks(&self) -> u64 {
         self.ticks
@@ -99,7 +99,7 @@ impl<H: Hardware> Controller<H> {
             right_cmd: self.applied.right,
             left_trim: self.model.left_trim,
             right_trim: self.model.right_trim,
-            rate_hz: self.telemetry_hz,
+            rate_hz: self.reports.telemetry.hz,
             front_ok: self.front.health.up,
             right_ok: self.right.health.up,
             compass_ok: self.compass.health.up,
