@@ -96,13 +96,7 @@ pub trait LineSink {
 /// The control loop over the robot's [`Hardware`] (see the module docs).
 /// [`Controller::new`] starts with a new log (`RingLog<0>` keeps none:
 /// every row is dropped and counted); [`Controller::with_log`] takes one.
-#[repr(C)]
 pub struct Controller<H: Hardware> {
-    // tick bar: declared order (repr(C)), small and hot fields first: the
-    // lx106's loads and stores take an offset of at most 255 bytes for a
-    // u8, 510 for a u16 and 1020 for a u32, and a field further out costs
-    // an address computation at every access. The drivers and the line
-    // buffers go last.
     /// A valid command arrived since the last tick.
     command_seen: bool,
     /// The lidar corrected last, so the two take turns.
