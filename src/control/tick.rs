@@ -203,8 +203,6 @@ impl<H: Hardware> Controller<H> {
 
     /// Runs one loop iteration at `now_us` (a free-running microsecond
     /// counter that may wrap; call it every [`TICK_US`]).
-    // tick bar: in a frame of its own, its field accesses take short offsets
-    #[inline(never)]
     pub fn tick(&mut self, now_us: u32, sink: &mut impl LineSink) {
         // 1. time
         let dt_us = match self.last_now_us {
@@ -330,8 +328,7 @@ impl<H: Hardware> Controller<H> {
         if let Some(timer) = self.mode.timer().copied() {
             self.timeout(timer, now, sink);
         }
-        // tick bar: the untethered checks cost a few compares when no
-        // mission, goto or forward motion runs
+        // a mission supervises the modes its steps start
         if self.missions.run.is_some() {
             self.supervise(now, sink);
         }
