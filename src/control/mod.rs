@@ -3,10 +3,10 @@
 
 pub mod goto;
 pub mod hardware;
-pub mod localize;
 pub mod log;
 pub mod mission;
 pub mod protocol;
+pub mod survey;
 pub mod tick;
 
 pub use hardware::Hardware;

@@ -33,38 +33,47 @@
 //! command or until no valid command came for `DEADMAN_MS`. A timed one runs
 //! for its duration (at most `config::serial::MAX_DURATION_MS`) and is its
 //! own deadman. A calibration sweep (`cal`) turns in place clockwise while
-//! the magnetometer samples feed a [`MagCalibrator`]; it stops when it has
+//! the magnetometer samples feed a [`MagCalibrator`](crate::model::compass::MagCalibrator); it stops when it has
 //! its samples (the new calibration is applied and printed as the config
 //! line to paste) or after [`config::compass::CALIBRATION_MS_PER_SAMPLE`]
 //! per sample. Any valid command refreshes the deadman (and ends a sweep);
 //! a malformed line gets one `# err` line and changes nothing.
 //!
-//! Untethered (`untethered.rs`): `goto` and `face` drive on the estimate
-//! (`control::goto`); a mission (`control::mission`) runs its steps after
-//! a countdown, with its own time limit instead of the deadman, and any
-//! byte received while it runs aborts it; during a mission telemetry rows
-//! also go into the on-board log (`control::log`), which `dump` sends. The
-//! wall stop: a forward motion, whatever started it, stops when the front
-//! lidar sees something nearer than [`config::goto::WALL_STOP_MM`].
+//! Untethered: `goto` and `face` drive on the estimate (`navigate.rs`,
+//! planned by `control::goto`); a mission (`mission_run.rs`, steps from
+//! `control::mission`) runs its steps after a countdown, with its own time
+//! limit instead of the deadman, and any byte received while it runs
+//! aborts it; during a mission telemetry rows also go into the on-board
+//! log (`report.rs`, `control::log`), which `dump` sends. The wall stop: a
+//! forward motion, whatever started it, stops when the front lidar sees
+//! something nearer than [`config::goto::WALL_STOP_MM`].
 //!
-//! Localization (`locating.rs`): `locate`, `reset` and the power-up run
-//! `control::localize`; while it runs, the readings go to its views instead
+//! Localization (`localizing.rs`): `locate`, `reset` and the power-up run
+//! a `control::survey`; while it runs, the readings go to its views instead
 //! of the estimator, it turns the body between views, and its fix starts
 //! the estimator. The calibration sweep is in `sweep.rs`.
+//!
+//! The parts: the [`Hardware`] the loop drives; a `SensorSlot` per sensor
+//! (`sensor.rs`: driver, health, newest sample, waiting reading); the
+//! [`Mode`] with the state of the mode that runs (`mode.rs`: a goto's
+//! `Nav`, a sweep's `Sweep`; the localization's `Localizing` beside it);
+//! `Missions` (the mission runner) and `Reports` (telemetry and log
+//! schedules). Commands come in through `commands.rs`; `readout.rs` has
+//! the accessors and `status`.
 //!
 //! No allocation, no panics: every buffer is a bounded `heapless` one, every
 //! clock difference is wrapping or saturating, every index is checked.
 
 mod clock;
 mod commands;
-mod locating;
+mod localizing;
 mod mission_run;
 mod mode;
 mod navigate;
+mod readout;
 mod report;
 mod sensor;
 mod sweep;
-mod views;
 
 use crate::config;
 use clock::{ms_to_us, Stamp, Timer, OVERRUN_US};
@@ -77,7 +86,7 @@ use crate::model::estimator::{Estimator, Update};
 use crate::model::measurement::{Arena, LidarId};
 use crate::model::{advance, ActuatorModel, Drive, Motion, Pose};
 pub use clock::TICK_US;
-use locating::Localizing;
+use localizing::Localizing;
 use mission_run::Missions;
 pub use mission_run::{MissionPhase, MissionRun};
 pub use mode::Mode;
@@ -85,7 +94,7 @@ use report::Reports;
 pub use sensor::SensorHealth;
 
 pub use crate::control::hardware::Hardware;
-use crate::control::localize::Failure;
+use crate::control::survey::Failure;
 
 /// Where the loop writes its output lines (without terminators): the UART
 /// on the robot, a `Vec<String>` in tests, a channel in the simulator.

@@ -76,7 +76,7 @@ pub enum Command {
     /// Sends the on-board log (`dump`).
     Dump,
     /// Finds where the robot is, turning in place (`locate`, or `reset`;
-    /// see `control::localize`).
+    /// see `control::survey`).
     Locate,
 }
 

@@ -2,8 +2,8 @@
 
 use super::clock::Timer;
 use super::{Controller, Hardware, LineSink, Mode};
-use crate::control::localize::Failure;
 use crate::control::protocol::{format_response, format_status, Command, ParseError, Response, Side, HELP};
+use crate::control::survey::Failure;
 use crate::model::Pose;
 
 impl<H: Hardware> Controller<H> {

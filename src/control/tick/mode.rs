@@ -25,7 +25,7 @@ pub enum Mode {
     Goto { nav: Nav, drive: Drive, timer: Timer },
     /// Standing still for a while (`wait`).
     Wait { timer: Timer },
-    /// Finding where it is (`locate`, `control::localize`): `drive` stands
+    /// Finding where it is (`locate`, `control::survey`): `drive` stands
     /// or turns between views, the timer is the procedure's time limit.
     Locate { drive: Drive, timer: Timer },
 }

@@ -1,36 +1,36 @@
-//! The loop's side of localization (`control::localize`): the procedure
-//! gets the readings instead of the estimator, drives the body between
-//! views, and its fix starts the estimator; `# located` or `# locate
-//! failed` says how it went.
+//! The loop's localization, the state of [`Mode::Locate`]: the survey
+//! (`control::survey`) gets the readings instead of the estimator, drives
+//! the body between views, and its fix starts the estimator; `# located`
+//! or `# locate failed` says how it went.
 
 use super::clock::Timer;
 use super::{Controller, Hardware, LineSink, Mode};
-use crate::config::locate as cfg;
+use crate::config;
 use crate::control::protocol::number::{push_fixed_parts, push_i32, push_str, push_u32};
 use crate::math::TurnRate;
 use crate::model::locate::Fix;
 use crate::model::measurement::LidarId;
 use crate::model::Motion;
 
-use crate::control::localize::{Failure, Procedure, Step};
 use crate::control::protocol::Command;
+use crate::control::survey::{Action, Failure, Survey};
 
 /// A localization under way (the state of [`Mode::Locate`]).
 pub(super) struct Localizing {
     /// Its views so far, and what it does next.
-    pub procedure: Procedure,
+    pub survey: Survey,
     /// The `goto` or `face` that waits for its fix.
     pub then: Option<Command>,
 }
 
 impl Localizing {
     pub const fn new() -> Localizing {
-        Localizing { procedure: Procedure::new(), then: None }
+        Localizing { survey: Survey::new(), then: None }
     }
 }
 
 impl<H: Hardware> Controller<H> {
-    /// The power-up localization ([`cfg::AT_POWER_UP`]): `locate` as if
+    /// The power-up localization ([`config::locate::AT_POWER_UP`]): `locate` as if
     /// typed (`# ok locate`). The firmware and the simulator call it once
     /// the sensors are up, with the loop started at the arena's centre
     /// ([`crate::model::measurement::Arena::centre`]).
@@ -42,13 +42,13 @@ impl<H: Hardware> Controller<H> {
     /// robot stands for its first view.
     pub(super) fn begin_locate(&mut self) {
         self.locating = Localizing::new();
-        self.mode = Mode::Locate { drive: self.model.stop(), timer: Timer::new(Some(cfg::TIME_LIMIT_MS)) };
+        self.mode = Mode::Locate { drive: self.model.stop(), timer: Timer::new(Some(config::locate::TIME_LIMIT_MS)) };
     }
 
     /// While locating, this tick's readings go to the procedure's view
     /// (the estimator starts afresh from its fix).
     pub(super) fn take_view_readings(&mut self) {
-        let p = &mut self.locating.procedure;
+        let p = &mut self.locating.survey;
         if let Some(d) = self.front.pending.take() {
             p.lidar(LidarId::Front, d);
         }
@@ -62,11 +62,11 @@ impl<H: Hardware> Controller<H> {
 
     /// One tick of the procedure: stand, turn, or its answer.
     pub(super) fn locate_tick(&mut self, sink: &mut impl LineSink) {
-        let motion = match self.locating.procedure.tick(&self.estimator.arena()) {
-            Step::Done(result) => return self.end_locate(result, sink),
-            Step::Stand => Motion::Stop,
-            Step::Turn { clockwise } => {
-                let rate = TurnRate::from_mrad_s(cfg::TURN_MRAD_S);
+        let motion = match self.locating.survey.tick(&self.estimator.arena()) {
+            Action::Done(result) => return self.end_locate(result, sink),
+            Action::Stand => Motion::Stop,
+            Action::Turn { clockwise } => {
+                let rate = TurnRate::from_mrad_s(config::locate::TURN_MRAD_S);
                 Motion::Turn(if clockwise { rate } else { rate.neg() })
             }
         };
@@ -86,7 +86,7 @@ impl<H: Hardware> Controller<H> {
         if matches!(self.mode, Mode::Locate { .. }) {
             self.mode = Mode::Idle;
         }
-        let views = self.locating.procedure.views().len();
+        let views = self.locating.survey.views().len();
         let then = core::mem::replace(&mut self.locating, Localizing::new()).then;
         match result {
             Ok(fix) => {

@@ -32,9 +32,9 @@ impl<H: Hardware> Controller<H> {
     pub fn mode(&self) -> Mode {
         self.mode
     }
-    /// The localization procedure (its views so far while locating).
-    pub fn locating(&self) -> &crate::control::localize::Procedure {
-        &self.locating.procedure
+    /// The localization's survey (its views so far while locating).
+    pub fn survey(&self) -> &crate::control::survey::Survey {
+        &self.locating.survey
     }
     /// The servo commands and motion set at the last tick.
     pub fn applied(&self) -> Drive {
