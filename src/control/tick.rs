@@ -89,7 +89,7 @@ pub use clock::TICK_US;
 use localizing::Localizing;
 use mission_run::Missions;
 pub use mission_run::{MissionPhase, MissionRun};
-pub use mode::Mode;
+pub use mode::{Mode, Sweep};
 use report::Reports;
 pub use sensor::SensorHealth;
 

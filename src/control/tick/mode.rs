@@ -3,8 +3,8 @@
 //! where it is, each with its timer.
 
 use super::clock::Timer;
-use super::sweep::Sweep;
 use crate::control::goto::{Nav, Target};
+use crate::model::compass::{CalStatus, MagCalibrator, MagCounts};
 use crate::model::{Drive, Motion, ServoCmd};
 
 /// What the loop is doing.
@@ -65,5 +65,30 @@ impl Mode {
             | Mode::Locate { timer, .. }
             | Mode::Wait { timer } => Some(timer),
         }
+    }
+}
+
+/// A calibration sweep under way (`sweep.rs`).
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub struct Sweep {
+    calibrator: MagCalibrator,
+    /// It has all its samples (it ends in the tick that got the last).
+    done: bool,
+}
+
+impl Sweep {
+    pub(super) fn new(calibrator: MagCalibrator) -> Sweep {
+        Sweep { calibrator, done: false }
+    }
+    pub(super) fn calibrator(&self) -> &MagCalibrator {
+        &self.calibrator
+    }
+    /// Feeds one raw compass sample.
+    pub(super) fn feed(&mut self, raw: MagCounts) {
+        self.done = self.calibrator.feed(raw) == CalStatus::Done;
+    }
+    /// True once, in the tick the sweep got its last sample.
+    pub(super) fn take_done(&mut self) -> bool {
+        core::mem::take(&mut self.done)
     }
 }

@@ -4,33 +4,15 @@
 //! calibration is applied and printed as the config line to paste.
 
 use super::clock::Timer;
+use super::mode::Sweep;
 use super::{Controller, Hardware, LineSink, Mode};
 use crate::config;
 use crate::control::protocol::number::push_str;
 use crate::control::protocol::response::{format_calibration_report, format_config_line};
 use crate::driver::MagCalibrate;
 use crate::math::TurnRate;
-use crate::model::compass::{CalStatus, CalibrationError, MagCalibration, MagCalibrator, MagCounts};
+use crate::model::compass::{CalibrationError, MagCalibration, MagCalibrator};
 use crate::model::Motion;
-
-/// A sweep under way.
-#[derive(Clone, Copy, PartialEq, Eq, Debug)]
-pub struct Sweep {
-    calibrator: MagCalibrator,
-    /// It has all its samples (it ends in the tick that got the last).
-    done: bool,
-}
-
-impl Sweep {
-    /// Feeds one raw compass sample.
-    pub(super) fn feed(&mut self, raw: MagCounts) {
-        self.done = self.calibrator.feed(raw) == CalStatus::Done;
-    }
-    /// True once, in the tick the sweep got its last sample.
-    pub(super) fn take_done(&mut self) -> bool {
-        core::mem::take(&mut self.done)
-    }
-}
 
 impl<H: Hardware> Controller<H> {
     /// Starts a sweep of `samples` samples (`cal`).
@@ -48,7 +30,7 @@ impl<H: Hardware> Controller<H> {
         self.mode = Mode::Calibrate {
             drive: self.model.drive(turn),
             timer: Timer::new(Some(limit_ms)),
-            sweep: Sweep { calibrator, done: false },
+            sweep: Sweep::new(calibrator),
         };
     }
 
@@ -56,7 +38,7 @@ impl<H: Hardware> Controller<H> {
     /// time is up).
     pub(super) fn finish_sweep(&mut self, sink: &mut impl LineSink) {
         let result = match &self.mode {
-            Mode::Calibrate { sweep, .. } => Some(sweep.calibrator.result()),
+            Mode::Calibrate { sweep, .. } => Some(sweep.calibrator().result()),
             _ => None,
         };
         self.end_calibration(result, sink);
@@ -70,7 +52,7 @@ impl<H: Hardware> Controller<H> {
         sink: &mut impl LineSink,
     ) {
         let (samples, sectors) = match &self.mode {
-            Mode::Calibrate { sweep, .. } => (sweep.calibrator.samples(), sweep.calibrator.sectors()),
+            Mode::Calibrate { sweep, .. } => (sweep.calibrator().samples(), sweep.calibrator().sectors()),
             _ => (0, 0),
         };
         if matches!(self.mode, Mode::Calibrate { .. }) {
