@@ -97,6 +97,7 @@
 //! into exactly the numbers written.
 
 pub mod command;
+pub mod field;
 pub mod line;
 pub mod number;
 pub mod out_line;
