@@ -41,14 +41,14 @@ impl<H: Hardware> Controller<H> {
     /// Starts the procedure (`locate`, `reset`, and at power-up): the
     /// robot stands for its first view.
     pub(super) fn begin_locate(&mut self) {
-        self.locating = Localizing::new();
+        self.localizing = Localizing::new();
         self.mode = Mode::Locate { drive: self.model.stop(), timer: Timer::new(Some(config::locate::TIME_LIMIT_MS)) };
     }
 
     /// While locating, this tick's readings go to the procedure's view
     /// (the estimator starts afresh from its fix).
     pub(super) fn take_view_readings(&mut self) {
-        let p = &mut self.locating.survey;
+        let p = &mut self.localizing.survey;
         if let Some(d) = self.front.pending.take() {
             p.lidar(LidarId::Front, d);
         }
@@ -62,7 +62,7 @@ impl<H: Hardware> Controller<H> {
 
     /// One tick of the procedure: stand, turn, or its answer.
     pub(super) fn locate_tick(&mut self, sink: &mut impl LineSink) {
-        let motion = match self.locating.survey.tick(&self.estimator.arena()) {
+        let motion = match self.localizing.survey.tick(&self.estimator.arena()) {
             Action::Done(result) => return self.end_locate(result, sink),
             Action::Stand => Motion::Stop,
             Action::Turn { clockwise } => {
@@ -86,8 +86,8 @@ impl<H: Hardware> Controller<H> {
         if matches!(self.mode, Mode::Locate { .. }) {
             self.mode = Mode::Idle;
         }
-        let views = self.locating.survey.views().len();
-        let then = core::mem::replace(&mut self.locating, Localizing::new()).then;
+        let views = self.localizing.survey.views().len();
+        let then = core::mem::replace(&mut self.localizing, Localizing::new()).then;
         match result {
             Ok(fix) => {
                 self.estimator.start_at(&fix);

@@ -74,7 +74,7 @@ impl<H: Hardware> Controller<H> {
     /// Any byte aborts a running mission (after its countdown: pulling
     /// the cable may make line noise).
     pub(super) fn byte_received(&mut self, sink: &mut impl LineSink) {
-        if matches!(self.missions.run, Some(MissionRun { phase: MissionPhase::Running, .. })) {
+        if self.missions.running() {
             self.abort("aborted: a byte came on the serial line", sink);
         }
     }

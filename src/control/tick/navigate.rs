@@ -30,7 +30,7 @@ impl<H: Hardware> Controller<H> {
             Err(Refusal::Uncertain) if may_locate => {
                 self.respond(&Response::Note("estimate too uncertain to steer by: locating first"), sink);
                 self.begin_locate();
-                self.locating.then = Some(*cmd);
+                self.localizing.then = Some(*cmd);
                 return;
             }
             Err(why) => {
@@ -86,7 +86,7 @@ impl<H: Hardware> Controller<H> {
             };
             self.respond(&Response::Note("estimate too uncertain on the way: locating first"), sink);
             self.begin_locate();
-            self.locating.then = Some(cmd);
+            self.localizing.then = Some(cmd);
             return;
         }
         match nav.step(&self.estimator.pose()) {

@@ -1,7 +1,7 @@
 //! What the loop shows: its clock, pose, mode, counters and drivers, and
 //! the `status` answer.
 
-use super::clock::{whole_ms, Stamp};
+use super::clock::whole_ms;
 use super::{Controller, Hardware, Mode, SensorHealth};
 use crate::control::protocol::number::div_rem_1000;
 use crate::control::protocol::{FaultCounters, Status};
@@ -12,11 +12,11 @@ use crate::model::{ActuatorModel, Drive, Pose};
 impl<H: Hardware> Controller<H> {
     /// Loop clock in ms (wraps after 49 days: the truncation is intended).
     pub fn t_ms(&self) -> u32 {
-        whole_ms(self.clock_us)
+        whole_ms(self.clock.us)
     }
     /// Loop clock, us since the first tick.
     pub fn clock_us(&self) -> u64 {
-        self.clock_us
+        self.clock.us
     }
     /// The pose the telemetry reports: the estimator's.
     pub fn pose(&self) -> Pose {
@@ -34,7 +34,7 @@ impl<H: Hardware> Controller<H> {
     }
     /// The localization's survey (its views so far while locating).
     pub fn survey(&self) -> &crate::control::survey::Survey {
-        &self.locating.survey
+        &self.localizing.survey
     }
     /// The servo commands and motion set at the last tick.
     pub fn applied(&self) -> Drive {
@@ -50,7 +50,7 @@ impl<H: Hardware> Controller<H> {
         self.reports.telemetry.hz
     }
     pub fn ticks(&self) -> u64 {
-        self.ticks
+        self.clock.ticks
     }
     pub fn front_health(&self) -> SensorHealth {
         self.front.health
@@ -87,7 +87,7 @@ impl<H: Hardware> Controller<H> {
 
     /// What `status` reports.
     pub fn status(&self) -> Status {
-        let now = self.clock_us as Stamp;
+        let now = self.clock.now();
         let remaining_ms = self.mode.timer().and_then(|t| t.remaining_us(now)).map(|us| div_rem_1000(us).0);
         Status {
             t_ms: self.t_ms(),

@@ -82,7 +82,7 @@ impl<H: Hardware> Controller<H> {
             r.header_due = true;
         }
         r.telemetry.set_rate(hz);
-        r.telemetry.next_us = self.clock_us as Stamp;
+        r.telemetry.next_us = self.clock.now();
     }
 
     /// A telemetry row when one is due (or, during a `dump`, the log's
