@@ -148,25 +148,14 @@ where
     /// later is re-initialised by the loop), starting at `pose` in the
     /// config's arena, stopped, with a new log.
     pub fn new(front: H::Front, right: H::Right, compass: H::Compass, servos: H::Servos, pose: Pose) -> Self {
-        Self::new_in(front, right, compass, servos, pose, Arena::DEFAULT)
-    }
-
-    /// [`Controller::new`] in another arena (the simulator's).
-    pub fn new_in(
-        front: H::Front,
-        right: H::Right,
-        compass: H::Compass,
-        servos: H::Servos,
-        pose: Pose,
-        arena: Arena,
-    ) -> Self {
-        Controller::with_log(front, right, compass, servos, pose, arena, H::Log::default())
+        Controller::with_log(front, right, compass, servos, pose, Arena::DEFAULT, H::Log::default())
     }
 }
 
 impl<H: Hardware> Controller<H> {
-    /// [`Controller::new_in`] with an on-board log (the firmware's is a
-    /// static, in the DRAM budget).
+    /// A loop in `arena` (the simulator's may differ from the config's)
+    /// with an on-board log (the firmware's is a static, in the DRAM
+    /// budget).
     pub fn with_log(
         front: H::Front,
         right: H::Right,
@@ -206,8 +195,8 @@ impl<H: Hardware> Controller<H> {
 
     /// Runs one loop iteration at `now_us` (a free-running microsecond
     /// counter that may wrap; call it every [`TICK_US`]).
-    // flash: inlined into the firmware's loop, the image's code is 9.6 KB
-    // larger (`cargo fw-image`)
+    // flash: out of line; inlined into the firmware's loop it makes the
+    // image's code much larger (`cargo fw-image`'s flash figure)
     #[inline(never)]
     pub fn tick(&mut self, now_us: u32, sink: &mut impl LineSink) {
         // 1. time

@@ -70,6 +70,7 @@ impl Reports {
 }
 
 impl<H: Hardware> Controller<H> {
+    /// The on-board log (what `dump` sends).
     pub fn log(&self) -> &H::Log {
         &self.log
     }
