@@ -88,6 +88,8 @@ impl SensorHealth {
 }
 
 /// What a sensor's sample gives the estimator (or a localization view).
+// tick bar: the impls are inlined: a sample behind a reference that is
+// not is copied with a `memcpy` call (opt-level "z")
 pub(super) trait Sample {
     type Reading: Copy;
     /// The reading to correct with (`None`: nothing to correct with, as a
