@@ -5,8 +5,9 @@
 use std::collections::VecDeque;
 
 use paperbot::config;
+use paperbot::control::log::RingLog;
 use paperbot::control::protocol::{parse_telemetry_row, telemetry_header, FaultCounters, HELP};
-use paperbot::control::{Controller, LineSink, Mode, TICK_US};
+use paperbot::control::{Controller, Hardware, LineSink, Mode, TICK_US};
 use paperbot::driver::{CompassSample, HeadingSensor, LidarSample, MagCalibrate, RangeSensor, SensorError, Servos};
 use paperbot::math::{Angle, Speed};
 use paperbot::model::compass::{MagCalibration, MagCounts, MagField};
@@ -129,7 +130,18 @@ impl Servos for FakeServos {
     }
 }
 
-type Ctl = Controller<FakeLidar, FakeLidar, FakeCompass, FakeServos>;
+/// The doubles as the loop's hardware (no on-board log).
+struct Fakes;
+
+impl Hardware for Fakes {
+    type Front = FakeLidar;
+    type Right = FakeLidar;
+    type Compass = FakeCompass;
+    type Servos = FakeServos;
+    type Log = RingLog<0>;
+}
+
+type Ctl = Controller<Fakes>;
 
 /// A loop at the origin over working test doubles, as configured.
 fn fresh() -> Ctl {

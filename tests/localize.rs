@@ -1,4 +1,4 @@
-//! Localization as the robot does it (`control::localize` in the loop), on
+//! Localization as the robot does it (`control::survey` in the loop), on
 //! the realistic simulator: the robot powers up at a random pose in the
 //! box, not knowing where it is, takes its views turning in place, and
 //! starts its estimate at the fix. The bar (the right pose, 30 mm

@@ -12,7 +12,8 @@
 //! command, sinks that hash or discard the lines).
 
 use paperbot::config;
-use paperbot::control::{Controller, LineSink};
+use paperbot::control::log::RingLog;
+use paperbot::control::{Controller, Hardware, LineSink};
 use paperbot::driver::{CompassSample, HeadingSensor, LidarSample, MagCalibrate, RangeSensor, SensorError, Servos};
 use paperbot::math::{Angle, Dt, Length, Speed, TurnRate};
 use paperbot::model::compass::{MagCalibration, MagCounts, MagField};
@@ -285,7 +286,18 @@ impl LineSink for NullSink {
     fn write_line(&mut self, _line: &str) {}
 }
 
-pub type ScriptController = Controller<ScriptLidar, ScriptLidar, ScriptCompass, ScriptServos>;
+/// The scripted doubles as the loop's hardware (no on-board log).
+pub struct Scripted;
+
+impl Hardware for Scripted {
+    type Front = ScriptLidar;
+    type Right = ScriptLidar;
+    type Compass = ScriptCompass;
+    type Servos = ScriptServos;
+    type Log = RingLog<0>;
+}
+
+pub type ScriptController = Controller<Scripted>;
 
 pub fn controller(pose: Pose) -> ScriptController {
     Controller::new(

@@ -40,15 +40,19 @@ mod robot {
     use embedded_hal_02::serial::Read as _;
     use esp8266_hal::ehal::watchdog::Watchdog as _;
     use esp8266_hal::entry;
+    use esp8266_hal::gpio::{Gpio0, Gpio2, Output, PushPull};
     use esp8266_hal::uart::UART0Serial;
 
     use paperbot::board::bitbang_i2c::CycleClock as _;
-    use paperbot::board::esp8266::{halt, start_watchdog, take_over_interrupts, Board, Ccount, I2cBus, MicrosClock};
+    use paperbot::board::esp8266::{
+        halt, start_watchdog, take_over_interrupts, Board, Ccount, CcountDelay, Eh1Output, I2cBus, MicrosClock,
+    };
     use paperbot::board::rtc_store::RtcMissionStore;
+    use paperbot::board::servo_pulse::ServoPulses;
     use paperbot::config;
     use paperbot::control::log::RingLog;
     use paperbot::control::mission::{Mission, MissionStore as _};
-    use paperbot::control::tick::{Controller, LineSink, TICK_US};
+    use paperbot::control::tick::{Controller, Hardware, LineSink, TICK_US};
     use paperbot::driver::bus::SharedI2c;
     use paperbot::driver::compass::Compass;
     use paperbot::driver::lidar::{bring_up, Lidar};
@@ -73,6 +77,19 @@ mod robot {
             let _ = self.0.write_str(line);
             let _ = self.0.write_str("\r\n");
         }
+    }
+
+    /// The robot's parts: the three chips on the one bit-banged bus (shared
+    /// through a `RefCell` that lives for `'a`), the servo pulses and the
+    /// static log.
+    struct Robot<'a>(core::marker::PhantomData<&'a ()>);
+
+    impl<'a> Hardware for Robot<'a> {
+        type Front = Lidar<SharedI2c<'a, I2cBus>, Eh1Output<Gpio0<Output<PushPull>>>, CcountDelay>;
+        type Right = Lidar<SharedI2c<'a, I2cBus>, Eh1Output<Gpio2<Output<PushPull>>>, CcountDelay>;
+        type Compass = Compass<SharedI2c<'a, I2cBus>, CcountDelay>;
+        type Servos = ServoPair<ServoPulses<'static>>;
+        type Log = &'static mut RingLog<{ config::log::ROWS }>;
     }
 
     #[entry]
@@ -111,7 +128,7 @@ mod robot {
         // SAFETY: `run` is entered once (main never returns): the only reference to LOG
         let log = unsafe { &mut *core::ptr::addr_of_mut!(LOG) };
         let start = Arena::DEFAULT.centre();
-        let mut ctl = Controller::with_log(front, right, compass, servos, start, Arena::DEFAULT, log);
+        let mut ctl = Controller::<Robot>::with_log(front, right, compass, servos, start, Arena::DEFAULT, log);
         // a mission uploaded before a reset (RTC memory; not after power-off)
         let mut store = RtcMissionStore;
         if let Some(mission) = Mission::decode(&store.load()) {

@@ -15,7 +15,7 @@
 //!
 //! Integer only: positions in 1/16 mm, angles as [`Angle`]s.
 
-use crate::config::{self, goto as cfg};
+use crate::config;
 use crate::math::{atan2, isqrt64, sin_cos, Angle, Speed, TurnRate};
 use crate::model::measurement::Arena;
 use crate::model::{Motion, Pose};
@@ -76,10 +76,10 @@ pub enum NavStep {
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
 pub enum Refusal {
     /// The target is outside the box or nearer a wall than
-    /// [`cfg::TARGET_WALL_MARGIN_MM`].
+    /// [`config::goto::TARGET_WALL_MARGIN_MM`].
     TooNearWall,
     /// The estimate's one-sigma position (mm) or heading (millidegrees) is
-    /// above [`cfg::MAX_SIGMA_MM`] / [`cfg::MAX_SIGMA_MDEG`].
+    /// above [`config::goto::MAX_SIGMA_MM`] / [`config::goto::MAX_SIGMA_MDEG`].
     Uncertain,
 }
 
@@ -93,17 +93,17 @@ impl Refusal {
 }
 
 /// One-sigma position uncertainties `x`, `y` small enough to steer by:
-/// `slack` times [`cfg::MAX_SIGMA_MM`] (1 to start, 2 on the way, as the
+/// `slack` times [`config::goto::MAX_SIGMA_MM`] (1 to start, 2 on the way, as the
 /// uncertainty breathes between corrections).
 pub fn position_steerable(x: crate::math::Length, y: crate::math::Length, slack: i32) -> bool {
-    let limit = crate::math::Length::from_mm(cfg::MAX_SIGMA_MM.saturating_mul(slack));
+    let limit = crate::math::Length::from_mm(config::goto::MAX_SIGMA_MM.saturating_mul(slack));
     x <= limit && y <= limit
 }
 
 /// Checks a target against the arena's walls (a heading always passes).
 pub fn check_target(target: Target, arena: &Arena) -> Result<(), Refusal> {
     let Target::Point { x_mm, y_mm } = target else { return Ok(()) };
-    let m = cfg::TARGET_WALL_MARGIN_MM;
+    let m = config::goto::TARGET_WALL_MARGIN_MM;
     let inside = |v: i32, size: i32| v >= m && v <= size.saturating_sub(m);
     // whole mm of the arena (Length is Q16): the floor keeps the test inward
     if inside(x_mm, arena.length_x.0 >> 16) && inside(y_mm, arena.width_y.0 >> 16) {
@@ -120,7 +120,7 @@ impl Nav {
 
     /// Plans this tick from the estimated `pose` (see the module docs).
     pub fn step(&mut self, pose: &Pose) -> NavStep {
-        let turn_tolerance = angle_lsb(cfg::TURN_TOLERANCE_MDEG);
+        let turn_tolerance = angle_lsb(config::goto::TURN_TOLERANCE_MDEG);
         let (tx, ty) = match self.target {
             Target::Heading(h) => {
                 let e = h.diff(pose.theta);
@@ -136,14 +136,17 @@ impl Nav {
         // along the heading from the reference point (Q4)
         let ahead = dx.saturating_mul(ux).saturating_add(dy.saturating_mul(uy)) >> 30;
         // there: a straight leg first drives on until the target is abeam
-        if length(dx, dy) <= i64::from(cfg::ARRIVE_MM) << Q4 && (self.leg == Leg::Turn || ahead.abs() <= ABEAM_Q4) {
+        if length(dx, dy) <= i64::from(config::goto::ARRIVE_MM) << Q4
+            && (self.leg == Leg::Turn || ahead.abs() <= ABEAM_Q4)
+        {
             return NavStep::Arrived;
         }
         let (ax, ay) =
             (dx.saturating_add(D_Q4.saturating_mul(ux) >> 30), dy.saturating_add(D_Q4.saturating_mul(uy) >> 30));
         let r = length(ax, ay);
         let e = if r < MIN_BEARING_Q4 { 0 } else { bearing(ax, ay).diff(pose.theta) };
-        let limit = if self.leg == Leg::Straight { angle_lsb(cfg::STEER_TOLERANCE_MDEG) } else { turn_tolerance };
+        let limit =
+            if self.leg == Leg::Straight { angle_lsb(config::goto::STEER_TOLERANCE_MDEG) } else { turn_tolerance };
         if e.unsigned_abs() > limit {
             self.leg = Leg::Turn;
             return turn(e);
@@ -154,7 +157,7 @@ impl Nav {
             return turn(if e == 0 { 1 } else { e });
         }
         self.leg = Leg::Straight;
-        let v = Speed::from_mm_s(cfg::SPEED_MM_S);
+        let v = Speed::from_mm_s(config::goto::SPEED_MM_S);
         let ahead_mm = (ahead >> Q4) as i32; // |ahead| < 2^36 / 16: the box is far smaller
         NavStep::Drive { motion: Motion::Straight(if ahead > 0 { v } else { v.neg() }), ahead_mm }
     }
@@ -162,7 +165,7 @@ impl Nav {
 
 /// A turn in place towards a signed heading error (positive: clockwise).
 fn turn(e: i32) -> NavStep {
-    let w = TurnRate::from_mrad_s(cfg::TURN_MRAD_S);
+    let w = TurnRate::from_mrad_s(config::goto::TURN_MRAD_S);
     NavStep::Drive { motion: Motion::Turn(if e > 0 { w } else { w.neg() }), ahead_mm: 0 }
 }
 
@@ -226,7 +229,7 @@ mod tests {
                 let miss = (p.x.to_mm_f64() - 400.0).hypot(p.y.to_mm_f64() - 250.0);
                 // within the tolerance; a goto that drove there ends with the
                 // target abeam (exact kinematics: 3.7 mm at most)
-                let bound = if ticks > 50 { 4.0 } else { f64::from(cfg::ARRIVE_MM) + 0.1 };
+                let bound = if ticks > 50 { 4.0 } else { f64::from(config::goto::ARRIVE_MM) + 0.1 };
                 assert!(miss <= bound, "from ({x}, {y}, {deg}): {miss:.1} mm off after {ticks} ticks");
             }
         }
@@ -250,7 +253,7 @@ mod tests {
     #[test]
     fn targets_near_a_wall_or_outside_are_refused() {
         let arena = Arena::DEFAULT; // 762.5 x 495
-        let m = cfg::TARGET_WALL_MARGIN_MM;
+        let m = config::goto::TARGET_WALL_MARGIN_MM;
         assert_eq!(check_target(Target::Point { x_mm: m, y_mm: m }, &arena), Ok(()));
         assert_eq!(check_target(Target::Point { x_mm: 762 - m, y_mm: 495 - m }, &arena), Ok(()));
         for (x, y) in [(m - 1, 200), (200, m - 1), (763 - m, 200), (200, 496 - m), (-100, 200), (2000, 200)] {

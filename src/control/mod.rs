@@ -2,10 +2,12 @@
 //! telemetry) and the serial protocol.
 
 pub mod goto;
-pub mod localize;
+pub mod hardware;
 pub mod log;
 pub mod mission;
 pub mod protocol;
+pub mod survey;
 pub mod tick;
 
+pub use hardware::Hardware;
 pub use tick::{Controller, LineSink, Mode, SensorHealth, TICK_US};

@@ -19,6 +19,7 @@
 //! ([`classify_line`]).
 
 pub mod command;
+pub mod field;
 pub mod line;
 pub mod number;
 pub mod out_line;

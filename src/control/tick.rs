@@ -33,58 +33,68 @@
 //! command or until no valid command came for `DEADMAN_MS`. A timed one runs
 //! for its duration (at most `config::serial::MAX_DURATION_MS`) and is its
 //! own deadman. A calibration sweep (`cal`) turns in place clockwise while
-//! the magnetometer samples feed a [`MagCalibrator`]; it stops when it has
+//! the magnetometer samples feed a [`MagCalibrator`](crate::model::compass::MagCalibrator); it stops when it has
 //! its samples (the new calibration is applied and printed as the config
 //! line to paste) or after [`config::compass::CALIBRATION_MS_PER_SAMPLE`]
 //! per sample. Any valid command refreshes the deadman (and ends a sweep);
 //! a malformed line gets one `# err` line and changes nothing.
 //!
-//! Untethered (`untethered.rs`): `goto` and `face` drive on the estimate
-//! (`control::goto`); a mission (`control::mission`) runs its steps after
-//! a countdown, with its own time limit instead of the deadman, and any
-//! byte received while it runs aborts it; during a mission telemetry rows
-//! also go into the on-board log (`control::log`), which `dump` sends. The
-//! wall stop: a forward motion, whatever started it, stops when the front
-//! lidar sees something nearer than [`config::goto::WALL_STOP_MM`].
+//! Untethered: `goto` and `face` drive on the estimate (`navigate.rs`,
+//! planned by `control::goto`); a mission (`mission_run.rs`, steps from
+//! `control::mission`) runs its steps after a countdown, with its own time
+//! limit instead of the deadman, and any byte received while it runs
+//! aborts it; during a mission telemetry rows also go into the on-board
+//! log (`report.rs`, `control::log`), which `dump` sends. The wall stop: a
+//! forward motion, whatever started it, stops when the front lidar sees
+//! something nearer than [`config::goto::WALL_STOP_MM`].
 //!
-//! Localization (`locating.rs`): `locate`, `reset` and the power-up run
-//! `control::localize`; while it runs, the readings go to its views instead
+//! Localization (`localizing.rs`): `locate`, `reset` and the power-up run
+//! a `control::survey`; while it runs, the readings go to its views instead
 //! of the estimator, it turns the body between views, and its fix starts
 //! the estimator. The calibration sweep is in `sweep.rs`.
+//!
+//! The parts: the [`Hardware`] the loop drives; a `SensorSlot` per sensor
+//! (`sensor.rs`: driver, health, newest sample, waiting reading); the
+//! [`Mode`] with the state of the mode that runs (`mode.rs`: a goto's
+//! `Nav`, a sweep's `Sweep`; the localization's `Localizing` beside it);
+//! `Missions` (the mission runner) and `Reports` (telemetry and log
+//! schedules). Commands come in through `commands.rs`; `readout.rs` has
+//! the accessors and `status`.
 //!
 //! No allocation, no panics: every buffer is a bounded `heapless` one, every
 //! clock difference is wrapping or saturating, every index is checked.
 
 mod clock;
-mod health;
-mod locating;
+mod commands;
+mod localizing;
+mod mission_run;
 mod mode;
+mod navigate;
+mod readout;
+mod report;
+mod sensor;
 mod sweep;
-mod untethered;
-mod views;
 
 use crate::config;
-use clock::{ms_to_us, reached, Stamp, Timer, OVERRUN_US};
-use health::Which;
+use clock::{ms_to_us, LoopClock, Stamp, Timer, OVERRUN_US};
+use sensor::{CompassSlot, LidarSlot, SensorSlot};
 
-use crate::control::protocol::{
-    format_response, format_status, format_telemetry, telemetry_header, Command, FaultCounters, LineBuffer, OutLine,
-    ParseError, Response, Side, Telemetry, HELP, MAX_OUT_LINE,
-};
-use crate::driver::{CompassSample, HeadingSensor, LidarSample, MagCalibrate, Servos};
-use crate::math::{div_u64, Angle, Dt, Length};
-use crate::model::compass::{CalStatus, MagCalibrator};
+use crate::control::protocol::{FaultCounters, LineBuffer, OutLine, Response, MAX_OUT_LINE};
+use crate::driver::{HeadingSensor, RangeSensor, Servos};
+use crate::math::Dt;
 use crate::model::estimator::{Estimator, Update};
 use crate::model::measurement::{Arena, LidarId};
 use crate::model::{advance, ActuatorModel, Drive, Motion, Pose};
 pub use clock::TICK_US;
-pub use health::SensorHealth;
-pub use mode::Mode;
-pub use untethered::{MissionPhase, MissionRun};
+use localizing::Localizing;
+use mission_run::Missions;
+pub use mission_run::{MissionPhase, MissionRun};
+pub use mode::{Mode, Sweep};
+use report::Reports;
+pub use sensor::SensorHealth;
 
-use crate::control::localize::{Failure, Procedure};
-use crate::control::log::{RingLog, RowLog};
-use crate::control::mission::Mission;
+pub use crate::control::hardware::Hardware;
+use crate::control::survey::Failure;
 
 /// Where the loop writes its output lines (without terminators): the UART
 /// on the robot, a `Vec<String>` in tests, a channel in the simulator.
@@ -92,35 +102,17 @@ pub trait LineSink {
     fn write_line(&mut self, line: &str);
 }
 
-/// The control loop, generic over the drivers and the on-board log (see
-/// the module docs). [`Controller::new`] has no log (every row is dropped
-/// and counted); [`Controller::with_log`] takes one.
-#[repr(C)]
-pub struct Controller<F, R, C, S, L = RingLog<0>> {
-    // tick bar: declared order (repr(C)), small and hot fields first: the
-    // lx106's loads and stores take an offset of at most 255 bytes for a
-    // u8, 510 for a u16 and 1020 for a u32, and a field further out costs
-    // an address computation at every access. The drivers and the line
-    // buffers go last.
+/// The control loop over the robot's [`Hardware`] (see the module docs).
+/// [`Controller::new`] starts with a new log (`RingLog<0>` keeps none:
+/// every row is dropped and counted); [`Controller::with_log`] takes one.
+pub struct Controller<H: Hardware> {
     /// A valid command arrived since the last tick.
     command_seen: bool,
-    header_due: bool,
-    /// A reading came since the last telemetry row (it is in `last_*`).
-    fresh_front: bool,
-    fresh_right: bool,
-    fresh_compass: bool,
     /// The lidar corrected last, so the two take turns.
     front_went_last: bool,
-    /// The sweep has all its samples (finished in the same tick).
-    calibration_done: bool,
     /// A sensor was re-initialised in this tick (the others wait a tick).
     reinit_ran: bool,
-    /// Readings since the last log row (`untethered::LOG_*` bits).
-    log_fresh: u8,
-    /// Loop clock, us since the first tick.
-    clock_us: u64,
-    /// The `now_us` of the previous tick (`None` before the first).
-    last_now_us: Option<u32>,
+    clock: LoopClock,
     /// When the last valid command was seen.
     last_command_us: Stamp,
     mode: Mode,
@@ -130,256 +122,72 @@ pub struct Controller<F, R, C, S, L = RingLog<0>> {
     estimator: Estimator,
     /// Dead-reckoned pose (the state update alone).
     dead: Pose,
-    telemetry_hz: u16,
-    /// <= 1 s
-    telemetry_period_us: u32,
-    next_telemetry_us: Stamp,
-    /// Readings waiting for their estimator correction (see
-    /// `config::timing::MAX_CORRECTIONS_PER_TICK`).
-    pending_front: Option<Length>,
-    pending_right: Option<Length>,
-    pending_heading: Option<Angle>,
-    /// Newest readings (for the estimator and tests).
-    last_front: Option<LidarSample>,
-    last_right: Option<LidarSample>,
-    last_compass: Option<CompassSample>,
-    health_front: SensorHealth,
-    health_right: SensorHealth,
-    health_compass: SensorHealth,
     faults: FaultCounters,
-    ticks: u64,
-    /// The running magnetometer calibration sweep (in [`Mode::Calibrate`]).
-    calibrator: Option<MagCalibrator>,
-    /// The running mission, if any.
-    run: Option<MissionRun>,
-    /// The on-board log's rate (0 = off) and schedule.
-    log_hz: u16,
-    log_period_us: u32,
-    next_log_us: Stamp,
-    /// The next log row `dump` sends (while it is sending).
-    dump_next: Option<usize>,
-    /// The mission changed since [`Controller::take_mission_changed`].
-    mission_changed: bool,
-    front: F,
-    right: R,
-    compass: C,
-    servos: S,
+    /// Telemetry, the on-board log's rows and `dump`: when they are due.
+    reports: Reports,
+    front: LidarSlot<H::Front>,
+    right: LidarSlot<H::Right>,
+    compass: CompassSlot<H::Compass>,
+    servos: H::Servos,
     /// The actuator model with the run-time trims.
     model: ActuatorModel,
     input: LineBuffer,
     out: OutLine<MAX_OUT_LINE>,
-    // tick bar: the mission, the localization procedure and the log are
-    // large and off the tick's path: last
-    mission: Mission,
-    /// The localization procedure (its state while in [`Mode::Locate`]).
-    locating: Procedure,
-    /// The `goto` or `face` that waits for the localization's fix.
-    after_locate: Option<Command>,
-    log: L,
+    /// The mission and its run.
+    missions: Missions,
+    /// The localization (the state of [`Mode::Locate`]).
+    localizing: Localizing,
+    log: H::Log,
 }
 
-impl<F, R, C, S> Controller<F, R, C, S>
+impl<H: Hardware> Controller<H>
 where
-    F: crate::driver::RangeSensor,
-    R: crate::driver::RangeSensor,
-    C: HeadingSensor + MagCalibrate,
-    S: Servos,
+    H::Log: Default,
 {
     /// A loop over sensors the caller has brought up (a sensor that fails
     /// later is re-initialised by the loop), starting at `pose` in the
-    /// config's arena, stopped.
-    pub fn new(front: F, right: R, compass: C, servos: S, pose: Pose) -> Self {
-        Self::new_in(front, right, compass, servos, pose, Arena::DEFAULT)
-    }
-
-    /// [`Controller::new`] in another arena (the simulator's).
-    pub fn new_in(front: F, right: R, compass: C, servos: S, pose: Pose, arena: Arena) -> Self {
-        Controller::with_log(front, right, compass, servos, pose, arena, RingLog::new())
+    /// config's arena, stopped, with a new log.
+    pub fn new(front: H::Front, right: H::Right, compass: H::Compass, servos: H::Servos, pose: Pose) -> Self {
+        Controller::with_log(front, right, compass, servos, pose, Arena::DEFAULT, H::Log::default())
     }
 }
 
-impl<F, R, C, S, L> Controller<F, R, C, S, L>
-where
-    F: crate::driver::RangeSensor,
-    R: crate::driver::RangeSensor,
-    C: HeadingSensor + MagCalibrate,
-    S: Servos,
-    L: RowLog,
-{
-    /// [`Controller::new_in`] with an on-board log (the firmware's is a
-    /// static, in the DRAM budget).
-    pub fn with_log(front: F, right: R, compass: C, servos: S, pose: Pose, arena: Arena, log: L) -> Self {
+impl<H: Hardware> Controller<H> {
+    /// A loop in `arena` (the simulator's may differ from the config's)
+    /// with an on-board log (the firmware's is a static, in the DRAM
+    /// budget).
+    pub fn with_log(
+        front: H::Front,
+        right: H::Right,
+        compass: H::Compass,
+        servos: H::Servos,
+        pose: Pose,
+        arena: Arena,
+        log: H::Log,
+    ) -> Self {
         let model = config::actuators::MODEL;
         Controller {
-            front,
-            right,
-            compass,
+            front: SensorSlot::new(front),
+            right: SensorSlot::new(right),
+            compass: SensorSlot::new(compass),
             servos,
             model,
             input: LineBuffer::new(),
             out: OutLine::new(),
-            clock_us: 0,
-            last_now_us: None,
+            clock: LoopClock::default(),
             command_seen: false,
             last_command_us: 0,
             mode: Mode::Idle,
             applied: model.stop(),
             estimator: Estimator::with_arena(pose, arena),
             dead: pose,
-            // the config's rate, as `set_rate` would set it: the first row
-            // (after the header) at the first tick
-            telemetry_hz: INITIAL_HZ,
-            telemetry_period_us: INITIAL_PERIOD_US,
-            next_telemetry_us: 0,
-            header_due: INITIAL_HZ != 0,
-            fresh_front: false,
-            fresh_right: false,
-            fresh_compass: false,
-            pending_front: None,
-            pending_right: None,
-            pending_heading: None,
+            reports: Reports::new(),
             front_went_last: false,
-            last_front: None,
-            last_right: None,
-            last_compass: None,
-            health_front: SensorHealth::new(),
-            health_right: SensorHealth::new(),
-            health_compass: SensorHealth::new(),
             faults: FaultCounters::default(),
-            ticks: 0,
-            calibrator: None,
-            calibration_done: false,
             reinit_ran: false,
-            log_fresh: 0,
-            run: None,
-            log_hz: config::log::HZ,
-            log_period_us: telemetry_period_us(config::log::HZ),
-            next_log_us: 0,
-            dump_next: None,
-            mission_changed: false,
-            mission: Mission::new(),
-            locating: Procedure::new(),
-            after_locate: None,
+            missions: Missions::new(),
+            localizing: Localizing::new(),
             log,
-        }
-    }
-
-    // ---- inputs ------------------------------------------------------
-
-    /// Takes one received serial byte; a finished line is parsed and
-    /// handled at once (its answer goes to `sink`).
-    pub fn feed(&mut self, byte: u8, sink: &mut impl LineSink) {
-        self.byte_received(sink);
-        match self.input.push(byte) {
-            None => {}
-            Some(Err(e)) => self.respond(&Response::Err(e), sink),
-            Some(Ok(line)) => match line.parse() {
-                Ok(cmd) => self.handle(cmd, sink),
-                Err(ParseError::Empty) => {}
-                Err(e) => self.respond(&Response::Err(e), sink),
-            },
-        }
-    }
-
-    /// [`Controller::feed`] for each byte.
-    pub fn feed_bytes(&mut self, bytes: &[u8], sink: &mut impl LineSink) {
-        for &b in bytes {
-            self.feed(b, sink);
-        }
-    }
-
-    /// Carries out one parsed command and answers `# ok <command>` (for a
-    /// motion the servos cannot drive as asked, the motion they drive).
-    pub fn handle(&mut self, cmd: Command, sink: &mut impl LineSink) {
-        self.command_seen = true;
-        self.command_received(sink);
-        // a command ends a sweep or a localization (it runs instead)
-        if !matches!(cmd, Command::Status | Command::Help | Command::Rate { .. }) {
-            match self.mode {
-                Mode::Calibrate { .. } => self.end_calibration(None, sink),
-                Mode::Locate { .. } => self.end_locate(Err(Failure::Interrupted), sink),
-                _ => {}
-            }
-        }
-        // a motion, a goto or face (which may be refused) and a mission
-        // start answer for themselves
-        if !matches!(cmd, Command::Drive { .. } | Command::Goto { .. } | Command::Face { .. } | Command::Mission(_)) {
-            self.respond(&Response::Ok(&cmd), sink);
-        }
-        match cmd {
-            Command::Drive { motion, duration_ms } => {
-                let drive = self.model.drive(motion);
-                self.mode = Mode::Drive { drive, timer: Timer::new(duration_ms) };
-                // a motion outside what the servos drive is driven at the
-                // nearest they can, and the answer says so: `fwd 0.05` -> `# ok fwd 0.124`
-                let driven = if drive.saturated { Command::Drive { motion: drive.motion, duration_ms } } else { cmd };
-                self.respond(&Response::Ok(&driven), sink);
-            }
-            Command::Stop => {
-                self.mode = Mode::Idle;
-            }
-            Command::Servo { left, right, duration_ms } => {
-                let motion = self.model.motion_from_commands(left, right);
-                self.mode = Mode::Servo { left, right, motion, timer: Timer::new(duration_ms) };
-            }
-            Command::Trim { side, trim } => {
-                match side {
-                    Side::Left => self.model.left_trim = trim,
-                    Side::Right => self.model.right_trim = trim,
-                }
-                // the neutral moved: recompute a running drive's commands
-                if let Mode::Drive { drive, .. } = &mut self.mode {
-                    *drive = self.model.drive(drive.motion);
-                }
-            }
-            Command::SetPose { x_mm, y_mm, heading } => self.set_pose(Pose::from_mm(x_mm, y_mm, heading)),
-            Command::Calibrate { samples } => self.begin_sweep(samples),
-            Command::Rate { hz } => {
-                self.set_rate(hz);
-            }
-            Command::Status => {
-                let status = self.status();
-                self.out.clear();
-                if format_status(&status, &mut self.out).is_ok() {
-                    sink.write_line(&self.out);
-                }
-            }
-            Command::Help => {
-                for line in HELP {
-                    sink.write_line(line);
-                }
-            }
-            Command::Goto { .. } | Command::Face { .. } | Command::Wait { .. } => self.begin(&cmd, true, sink),
-            Command::Mission(op) => self.mission_op(op, &cmd, sink),
-            Command::Log { hz } => self.set_log_rate(hz),
-            Command::Dump => self.start_dump(sink),
-            Command::Locate => self.begin_locate(),
-        }
-    }
-
-    /// Sets the estimate (and the dead-reckoned pose) to `pose`.
-    fn set_pose(&mut self, pose: Pose) {
-        self.estimator.reset(pose);
-        self.dead = pose;
-    }
-
-    fn respond(&mut self, r: &Response, sink: &mut impl LineSink) {
-        self.out.clear();
-        if format_response(r, &mut self.out).is_ok() {
-            sink.write_line(&self.out);
-        }
-    }
-
-    fn set_rate(&mut self, hz: u16) {
-        let was_off = self.telemetry_hz == 0;
-        self.telemetry_hz = hz;
-        // hz = 0 (off) gives period 0
-        // <= 1_000_000: fits
-        self.telemetry_period_us = telemetry_period_us(hz);
-        // the first row at the next tick (after the header if telemetry was off)
-        self.next_telemetry_us = self.clock_us as Stamp;
-        if hz != 0 && was_off {
-            self.header_due = true;
         }
     }
 
@@ -387,21 +195,16 @@ where
 
     /// Runs one loop iteration at `now_us` (a free-running microsecond
     /// counter that may wrap; call it every [`TICK_US`]).
-    // tick bar: in a frame of its own, its field accesses take short offsets
+    // flash: out of line; inlined into the firmware's loop it makes the
+    // image's code much larger (`cargo fw-image`'s flash figure)
     #[inline(never)]
     pub fn tick(&mut self, now_us: u32, sink: &mut impl LineSink) {
         // 1. time
-        let dt_us = match self.last_now_us {
-            None => 0,
-            Some(last) => now_us.wrapping_sub(last),
-        };
-        self.last_now_us = Some(now_us);
-        self.clock_us = self.clock_us.saturating_add(u64::from(dt_us));
-        self.ticks = self.ticks.saturating_add(1);
+        let dt_us = self.clock.tick(now_us);
         if dt_us > OVERRUN_US {
             self.faults.overruns = self.faults.overruns.saturating_add(1);
         }
-        let now = self.clock_us as Stamp; // the low 32 bits
+        let now = self.clock.now();
         if core::mem::take(&mut self.command_seen) {
             self.last_command_us = now;
         }
@@ -436,7 +239,7 @@ where
 
         // 6. telemetry (and in a mission the on-board log)
         self.telemetry(now, sink);
-        if self.run.is_some() {
+        if self.missions.run.is_some() {
             self.log_row(now);
         }
     }
@@ -444,7 +247,7 @@ where
     /// Integrates `motion` over `dt_us` in steps of at most [`Dt::MAX`]
     /// (a late tick of up to a second is integrated in full; beyond that
     /// the robot has stopped by the deadman anyway).
-    fn advance(&mut self, motion: Motion, dt_us: u32) {
+    pub(super) fn advance(&mut self, motion: Motion, dt_us: u32) {
         const MAX_STEPS: u32 = 16; // 16 * 65.5 ms > 1 s
         let mut left = dt_us;
         let mut n = 0;
@@ -457,59 +260,39 @@ where
         }
     }
 
-    fn sense(&mut self, now: Stamp) {
+    pub(super) fn sense(&mut self, now: Stamp) {
         self.reinit_ran = false;
-        // Each sample is stored once, where it is kept (`last_*`; `fresh_*`
-        // flag it for the next row): at opt-level "z" a copy of a
-        // `CompassSample` is a `memcpy` call.
-        if self.ready(Which::Front, now) {
-            let polled = self.front.poll();
-            self.lidar_polled(Which::Front, polled, now);
+        let (ran, faults) = (&mut self.reinit_ran, &mut self.faults);
+        if self.front.ready(now, ran, faults, RangeSensor::reinit) {
+            let polled = self.front.driver.poll();
+            self.front.polled(polled, now, faults);
         }
-        if self.ready(Which::Right, now) {
-            let polled = self.right.poll();
-            self.lidar_polled(Which::Right, polled, now);
+        if self.right.ready(now, ran, faults, RangeSensor::reinit) {
+            let polled = self.right.driver.poll();
+            self.right.polled(polled, now, faults);
         }
-        if self.ready(Which::Compass, now) {
-            match self.compass.poll() {
-                Ok(s) => {
-                    self.sampled(Which::Compass, now);
-                    self.fresh_compass = true;
-                    self.log_fresh |= untethered::LOG_COMPASS;
-                    self.pending_heading = Some(s.heading);
-                    if let Some(cal) = self.calibrator.as_mut() {
-                        self.calibration_done = cal.feed(s.raw) == CalStatus::Done;
-                    }
-                    // tick bar: the field member by member (at opt-level
-                    // "z" a copy of the 12-byte `MagField` is a `memcpy` call)
-                    let f = s.field;
-                    let kept = self.last_compass.insert(CompassSample {
-                        raw: s.raw,
-                        field: Default::default(),
-                        heading: s.heading,
-                    });
-                    kept.field.x = f.x;
-                    kept.field.y = f.y;
-                    kept.field.z = f.z;
-                }
-                Err(e) => self.missed(Which::Compass, e, now),
+        if self.compass.ready(now, ran, faults, HeadingSensor::reinit) {
+            let polled = self.compass.driver.poll();
+            if let (Some(s), Mode::Calibrate { sweep, .. }) = (self.compass.polled(polled, now, faults), &mut self.mode)
+            {
+                sweep.feed(s.raw);
             }
         }
     }
 
     /// Applies one waiting reading to the estimator: a lidar first (the two
     /// take turns), else the compass. False when nothing waits.
-    fn correct_one(&mut self) -> bool {
-        let front_first = !self.front_went_last || self.pending_right.is_none();
-        let lidar = if front_first && self.pending_front.is_some() {
-            self.pending_front.take().map(|d| (LidarId::Front, d))
+    pub(super) fn correct_one(&mut self) -> bool {
+        let front_first = !self.front_went_last || self.right.pending.is_none();
+        let lidar = if front_first && self.front.pending.is_some() {
+            self.front.pending.take().map(|d| (LidarId::Front, d))
         } else {
-            self.pending_right.take().map(|d| (LidarId::Right, d))
+            self.right.pending.take().map(|d| (LidarId::Right, d))
         };
         let u = if let Some((id, d)) = lidar {
             self.front_went_last = id == LidarId::Front;
             self.estimator.update_lidar(id, d)
-        } else if let Some(h) = self.pending_heading.take() {
+        } else if let Some(h) = self.compass.pending.take() {
             self.estimator.update_heading(h)
         } else {
             return false;
@@ -518,23 +301,24 @@ where
         true
     }
 
-    fn count_update(&mut self, u: Update) {
+    pub(super) fn count_update(&mut self, u: Update) {
         if u == Update::Outlier {
             self.faults.rejected_outliers = self.faults.rejected_outliers.saturating_add(1);
         }
     }
 
-    fn decide(&mut self, now: Stamp, sink: &mut impl LineSink) {
-        if core::mem::take(&mut self.calibration_done) {
-            self.finish_sweep(sink);
-            return;
+    pub(super) fn decide(&mut self, now: Stamp, sink: &mut impl LineSink) {
+        if let Mode::Calibrate { sweep, .. } = &mut self.mode {
+            if sweep.take_done() {
+                self.finish_sweep(sink);
+                return;
+            }
         }
         if let Some(timer) = self.mode.timer().copied() {
             self.timeout(timer, now, sink);
         }
-        // tick bar: the untethered checks cost a few compares when no
-        // mission, goto or forward motion runs
-        if self.run.is_some() {
+        // a mission supervises the modes its steps start
+        if self.missions.run.is_some() {
             self.supervise(now, sink);
         }
         match self.mode {
@@ -555,7 +339,7 @@ where
     }
 
     /// A mode's timer: its end, or the deadman for an untimed one.
-    fn timeout(&mut self, timer: Timer, now: Stamp, sink: &mut impl LineSink) {
+    pub(super) fn timeout(&mut self, timer: Timer, now: Stamp, sink: &mut impl LineSink) {
         match timer.remaining_us(now) {
             Some(0) if matches!(self.mode, Mode::Calibrate { .. }) => {
                 self.finish_sweep(sink);
@@ -581,7 +365,7 @@ where
     }
 
     /// The servo commands and motion of the current mode.
-    fn current_drive(&self) -> Drive {
+    pub(super) fn current_drive(&self) -> Drive {
         match self.mode {
             Mode::Idle | Mode::Wait { .. } => self.model.stop(),
             Mode::Drive { drive, .. }
@@ -590,68 +374,5 @@ where
             | Mode::Locate { drive, .. } => drive,
             Mode::Servo { left, right, motion, .. } => Drive { left, right, motion, saturated: false },
         }
-    }
-
-    fn telemetry(&mut self, now: Stamp, sink: &mut impl LineSink) {
-        if self.dump_next.is_some() {
-            // the log's rows go out instead (telemetry would mix with them)
-            return self.dump_rows(sink);
-        }
-        if self.telemetry_hz == 0 || !reached(now, self.next_telemetry_us) {
-            return;
-        }
-        if core::mem::take(&mut self.header_due) {
-            sink.write_line(telemetry_header());
-        }
-        // keep the schedule; after a stall, start again from now
-        self.next_telemetry_us = self.next_telemetry_us.wrapping_add(self.telemetry_period_us);
-        if reached(now, self.next_telemetry_us) {
-            self.next_telemetry_us = now.wrapping_add(self.telemetry_period_us);
-        }
-        let fresh = [
-            core::mem::take(&mut self.fresh_front),
-            core::mem::take(&mut self.fresh_right),
-            core::mem::take(&mut self.fresh_compass),
-        ];
-        let t = self.snapshot(fresh);
-        self.out.clear();
-        if format_telemetry(&t, &mut self.out).is_ok() {
-            sink.write_line(&self.out);
-        }
-    }
-}
-
-impl<F, R, C, S, L> Controller<F, R, C, S, L> {
-    /// A telemetry row's values now, with the readings flagged fresh
-    /// (front, right, compass).
-    fn snapshot(&self, [front, right, compass]: [bool; 3]) -> Telemetry {
-        Telemetry {
-            t_ms: self.t_ms(),
-            pose: self.estimator.pose(),
-            front: self.last_front.filter(|_| front),
-            right: self.last_right.filter(|_| right),
-            compass: self.last_compass.filter(|_| compass),
-            motion: self.applied.motion,
-            left_cmd: self.applied.left,
-            right_cmd: self.applied.right,
-            faults: self.faults,
-        }
-    }
-}
-
-const _: () = assert!(config::timing::TELEMETRY_HZ <= config::serial::MAX_TELEMETRY_HZ as u32);
-/// The telemetry rate a new loop starts at (`config::timing::TELEMETRY_HZ`,
-/// asserted above to fit the protocol's range) and its period, us (0 = off,
-/// as [`Controller::set_rate`] gives).
-const INITIAL_HZ: u16 = config::timing::TELEMETRY_HZ as u16;
-const INITIAL_PERIOD_US: u32 = telemetry_period_us(INITIAL_HZ);
-
-/// The period of a telemetry rate, us: 0 for 0 Hz (off), else at most 1 s
-/// (fits). [`div_u64`] stays a call: a division the compiler sees as 32-bit
-/// would link compiler_builtins' `__udivsi3`, which the ROM file leaves out.
-const fn telemetry_period_us(hz: u16) -> u32 {
-    match div_u64(1_000_000, hz as u64) {
-        Some(q) => q as u32,
-        None => 0,
     }
 }

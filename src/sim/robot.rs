@@ -34,7 +34,7 @@ use super::script::Script;
 use super::sensors::{SimCompass, SimLidar, SimSensors};
 use crate::config;
 use crate::control::log::RingLog;
-use crate::control::{Controller, LineSink, TICK_US};
+use crate::control::{Controller, Hardware, LineSink, TICK_US};
 use crate::driver::{HeadingSensor, Servos};
 use crate::math::Length;
 use crate::model::lidar::LidarMount;
@@ -61,8 +61,20 @@ impl Servos for SimServos {
     }
 }
 
+/// The simulated robot's parts: its drivers on the simulated bus, and the
+/// robot's on-board log.
+pub struct SimHardware;
+
+impl Hardware for SimHardware {
+    type Front = SimLidar;
+    type Right = SimLidar;
+    type Compass = SimCompass;
+    type Servos = SimServos;
+    type Log = RingLog<{ config::log::ROWS }>;
+}
+
 /// The control loop on the simulated drivers, with the robot's on-board log.
-pub type SimController = Controller<SimLidar, SimLidar, SimCompass, SimServos, RingLog<{ config::log::ROWS }>>;
+pub type SimController = Controller<SimHardware>;
 
 /// Noise levels (one sigma); [`Noise::OFF`] for exact runs.
 #[derive(Clone, Copy, PartialEq, Debug)]

@@ -15,7 +15,8 @@
 use core::hint::black_box as bb;
 use core::ptr::{read_volatile, write_volatile};
 
-use paperbot::control::{Controller, LineSink};
+use paperbot::control::log::RingLog;
+use paperbot::control::{Controller, Hardware, LineSink};
 use paperbot::driver::{CompassSample, HeadingSensor, LidarSample, MagCalibrate, RangeSensor, SensorError, Servos};
 use paperbot::model::compass::MagCalibration;
 use paperbot::model::{Pose, ServoCmd};
@@ -76,9 +77,20 @@ impl LineSink for Uart {
     }
 }
 
+/// The doubles above as the loop's hardware (no on-board log).
+struct Probe;
+
+impl Hardware for Probe {
+    type Front = InLidar;
+    type Right = InLidar;
+    type Compass = InCompass;
+    type Servos = OutServos;
+    type Log = RingLog<0>;
+}
+
 #[no_mangle]
 pub extern "C" fn rust_main() -> i32 {
-    let mut ctl = Controller::new(InLidar, InLidar, InCompass(MagCalibration::IDENTITY), OutServos, Pose::default());
+    let mut ctl = Controller::<Probe>::new(InLidar, InLidar, InCompass(MagCalibration::IDENTITY), OutServos, Pose::default());
     let mut uart = Uart;
     ctl.feed(input() as u8, &mut uart);
     ctl.tick(input(), &mut uart);

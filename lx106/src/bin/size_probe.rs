@@ -24,12 +24,13 @@ use core::ptr::{read_volatile, write_volatile};
 
 use paperbot::board::bitbang_i2c::{BitBangI2c, CycleClock, I2cPins, Timing};
 use paperbot::board::servo_pulse::{Channel, PulseMailbox, PulseScheduler, PulseTimer, ServoPulses};
-use paperbot::control::{Controller, LineSink};
+use paperbot::control::log::RingLog;
+use paperbot::control::{Controller, Hardware, LineSink};
 use paperbot::driver::bus::SharedI2c;
 use paperbot::driver::compass::Compass;
 use paperbot::driver::lidar::{bring_up, Lidar};
 use paperbot::driver::servo::ServoPair;
-use paperbot::driver::{HeadingSensor, MagCalibrate, RangeSensor, Servos};
+use paperbot::driver::HeadingSensor;
 use paperbot::model::Pose;
 
 /// ESP8266 GPIO_OUT / GPIO_IN, FRC1, UART0 FIFO (register addresses).
@@ -126,6 +127,17 @@ impl LineSink for Uart {
     }
 }
 
+/// The firmware's drivers over this probe's pins (no on-board log).
+struct Stack<'a>(core::marker::PhantomData<&'a ()>);
+
+impl<'a> Hardware for Stack<'a> {
+    type Front = Lidar<SharedI2c<'a, BitBangI2c<Pins, Clock>>, Xshut, Delay>;
+    type Right = Lidar<SharedI2c<'a, BitBangI2c<Pins, Clock>>, Xshut, Delay>;
+    type Compass = Compass<SharedI2c<'a, BitBangI2c<Pins, Clock>>, Delay>;
+    type Servos = ServoPair<ServoPulses<'a>>;
+    type Log = RingLog<0>;
+}
+
 #[no_mangle]
 pub extern "C" fn rust_main() -> i32 {
     // the firmware's stack
@@ -138,7 +150,7 @@ pub extern "C" fn rust_main() -> i32 {
     bb(compass.reinit().is_ok());
     let mailbox = PulseMailbox::default();
     let servos = ServoPair::with_config(ServoPulses::new(&mailbox));
-    control_loop(Controller::new(front, right, compass, servos, Pose::default()));
+    control_loop(Controller::<Stack>::new(front, right, compass, servos, Pose::default()));
     let mut sched = PulseScheduler::default();
     let mut frc1 = Frc1;
     sched.start(&mut frc1);
@@ -150,9 +162,7 @@ pub extern "C" fn rust_main() -> i32 {
 /// `rust_main`, the whole stack in one function made LLVM's Xtensa backend
 /// fail ("Cannot scavenge register without an emergency spill slot").
 #[inline(never)]
-fn control_loop<F: RangeSensor, R: RangeSensor, C: HeadingSensor + MagCalibrate, S: Servos>(
-    mut ctl: Controller<F, R, C, S>,
-) {
+fn control_loop(mut ctl: Controller<Stack<'_>>) {
     let mut uart = Uart;
     for &b in bb(b"fwd 0.13 2.5\n") {
         ctl.feed(bb(b), &mut uart);

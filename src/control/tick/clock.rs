@@ -53,6 +53,38 @@ const _: () = {
     assert!(timing::SENSOR_RETRY_MS <= MAX_SPAN_MS && timing::SENSOR_SILENT_MS <= MAX_SPAN_MS);
 };
 
+/// The loop's own clock, kept from the free-running, wrapping 32-bit
+/// microsecond counter the tick is called with.
+#[derive(Clone, Copy, PartialEq, Eq, Debug, Default)]
+pub(super) struct LoopClock {
+    /// us since the first tick.
+    pub us: u64,
+    /// The counter at the previous tick (`None` before the first).
+    last_now_us: Option<u32>,
+    /// Ticks so far.
+    pub ticks: u64,
+}
+
+impl LoopClock {
+    /// A tick at counter value `now_us`: the time since the previous tick,
+    /// us (0 at the first).
+    pub fn tick(&mut self, now_us: u32) -> u32 {
+        let dt_us = match self.last_now_us {
+            None => 0,
+            Some(last) => now_us.wrapping_sub(last),
+        };
+        self.last_now_us = Some(now_us);
+        self.us = self.us.saturating_add(u64::from(dt_us));
+        self.ticks = self.ticks.saturating_add(1);
+        dt_us
+    }
+
+    /// Now, as a [`Stamp`] (the low 32 bits).
+    pub fn now(&self) -> Stamp {
+        self.us as Stamp
+    }
+}
+
 /// How long a mode runs: for `duration_us` from the first tick that drives
 /// it (so a command runs for its whole duration whenever it arrives between
 /// ticks), or, without a duration, until the deadman. A duration is at most

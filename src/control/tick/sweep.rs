@@ -1,47 +1,46 @@
-//! The loop's magnetometer calibration sweep (`cal`): it turns in place
-//! while the compass's raw samples feed a [`MagCalibrator`]; when it has
-//! them (or its time is up) the new calibration is applied and printed as
-//! the config line to paste.
+//! The magnetometer calibration sweep (`cal`), the state of
+//! [`Mode::Calibrate`]: it turns in place while the compass's raw samples
+//! feed a [`MagCalibrator`]; when it has them (or its time is up) the new
+//! calibration is applied and printed as the config line to paste.
 
 use super::clock::Timer;
-use super::{Controller, LineSink, Mode};
+use super::mode::Sweep;
+use super::{Controller, Hardware, LineSink, Mode};
 use crate::config;
-use crate::control::log::RowLog;
 use crate::control::protocol::number::push_str;
 use crate::control::protocol::response::{format_calibration_report, format_config_line};
-use crate::driver::{HeadingSensor, MagCalibrate, Servos};
+use crate::driver::MagCalibrate;
 use crate::math::TurnRate;
 use crate::model::compass::{CalibrationError, MagCalibration, MagCalibrator};
 use crate::model::Motion;
 
-impl<F, R, C, S, L> Controller<F, R, C, S, L>
-where
-    F: crate::driver::RangeSensor,
-    R: crate::driver::RangeSensor,
-    C: HeadingSensor + MagCalibrate,
-    S: Servos,
-    L: RowLog,
-{
+impl<H: Hardware> Controller<H> {
     /// Starts a sweep of `samples` samples (`cal`).
     pub(super) fn begin_sweep(&mut self, samples: u16) {
         let calibrator = MagCalibrator::new(
-            self.compass.asa(),
+            self.compass.driver.asa(),
             config::compass::AXES,
             samples,
             config::compass::CALIBRATION_MIN_SECTORS,
             config::compass::CALIBRATION_MIN_RADIUS,
         );
-        self.calibrator = Some(calibrator);
         let turn = Motion::Turn(TurnRate::from_mrad_s(config::compass::CALIBRATION_TURN_MRAD_S));
         // max_samples <= u16::MAX: the product fits in u32 (asserted at MAX_SPAN_MS)
         let limit_ms = u32::from(calibrator.max_samples()) * config::compass::CALIBRATION_MS_PER_SAMPLE;
-        self.mode = Mode::Calibrate { drive: self.model.drive(turn), timer: Timer::new(Some(limit_ms)) };
+        self.mode = Mode::Calibrate {
+            drive: self.model.drive(turn),
+            timer: Timer::new(Some(limit_ms)),
+            sweep: Sweep::new(calibrator),
+        };
     }
 
     /// Ends the running sweep with its result (its samples are in, or its
     /// time is up).
     pub(super) fn finish_sweep(&mut self, sink: &mut impl LineSink) {
-        let result = self.calibrator.as_ref().map(MagCalibrator::result);
+        let result = match &self.mode {
+            Mode::Calibrate { sweep, .. } => Some(sweep.calibrator().result()),
+            _ => None,
+        };
         self.end_calibration(result, sink);
     }
 
@@ -52,14 +51,15 @@ where
         result: Option<Result<MagCalibration, CalibrationError>>,
         sink: &mut impl LineSink,
     ) {
-        let (samples, sectors) = self.calibrator.map(|c| (c.samples(), c.sectors())).unwrap_or((0, 0));
-        self.calibrator = None;
-        self.calibration_done = false;
+        let (samples, sectors) = match &self.mode {
+            Mode::Calibrate { sweep, .. } => (sweep.calibrator().samples(), sweep.calibrator().sectors()),
+            _ => (0, 0),
+        };
         if matches!(self.mode, Mode::Calibrate { .. }) {
             self.mode = Mode::Idle;
         }
         if let Some(Ok(cal)) = result {
-            self.compass.set_calibration(cal);
+            self.compass.driver.set_calibration(cal);
         }
         // Integer formatting (no core::fmt on the robot), straight into the
         // output line: every text here is printable ASCII, as `Response::Note`

@@ -16,7 +16,7 @@
 //! | `q`, Esc, Ctrl-C       | stop the robot and quit                  |
 //!
 //! `r` is for a robot that was carried or got lost: it turns in place and
-//! finds where it is from the walls (`control::localize`). Letters work in
+//! finds where it is from the walls (`control::survey`). Letters work in
 //! either case. A terminal reports no key releases, so a
 //! motion is latched: it runs until space or another motion key, and the
 //! tool keeps refreshing it (see [`super::drive`]).

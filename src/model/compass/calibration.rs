@@ -76,7 +76,7 @@ pub enum CalStatus {
 }
 
 /// The incremental min/max sweep (see the module docs).
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
 pub struct MagCalibrator {
     asa: [u8; 3],
     axes: AxisMap,

@@ -1,67 +1,72 @@
-//! The loop's side of localization (`control::localize`): the procedure
-//! gets the readings instead of the estimator, drives the body between
-//! views, and its fix starts the estimator; `# located` or `# locate
-//! failed` says how it went.
+//! The loop's localization, the state of [`Mode::Locate`]: the survey
+//! (`control::survey`) gets the readings instead of the estimator, drives
+//! the body between views, and its fix starts the estimator; `# located`
+//! or `# locate failed` says how it went.
 
 use super::clock::Timer;
-use super::{Controller, LineSink, Mode};
-use crate::config::locate as cfg;
-use crate::control::log::RowLog;
+use super::{Controller, Hardware, LineSink, Mode};
+use crate::config;
 use crate::control::protocol::number::{push_fixed_parts, push_i32, push_str, push_u32};
-use crate::driver::{HeadingSensor, MagCalibrate, Servos};
 use crate::math::TurnRate;
 use crate::model::locate::Fix;
 use crate::model::measurement::LidarId;
 use crate::model::Motion;
 
-use crate::control::localize::{Failure, Procedure, Step};
+use crate::control::protocol::Command;
+use crate::control::survey::{Action, Failure, Survey};
 
-impl<F, R, C, S, L> Controller<F, R, C, S, L>
-where
-    F: crate::driver::RangeSensor,
-    R: crate::driver::RangeSensor,
-    C: HeadingSensor + MagCalibrate,
-    S: Servos,
-    L: RowLog,
-{
-    /// The power-up localization ([`cfg::AT_POWER_UP`]): `locate` as if
+/// A localization under way (the state of [`Mode::Locate`]).
+pub(super) struct Localizing {
+    /// Its views so far, and what it does next.
+    pub survey: Survey,
+    /// The `goto` or `face` that waits for its fix.
+    pub then: Option<Command>,
+}
+
+impl Localizing {
+    pub const fn new() -> Localizing {
+        Localizing { survey: Survey::new(), then: None }
+    }
+}
+
+impl<H: Hardware> Controller<H> {
+    /// The power-up localization ([`config::locate::AT_POWER_UP`]): `locate` as if
     /// typed (`# ok locate`). The firmware and the simulator call it once
     /// the sensors are up, with the loop started at the arena's centre
     /// ([`crate::model::measurement::Arena::centre`]).
     pub fn power_up(&mut self, sink: &mut impl LineSink) {
-        self.handle(crate::control::protocol::Command::Locate, sink);
+        self.handle(Command::Locate, sink);
     }
 
     /// Starts the procedure (`locate`, `reset`, and at power-up): the
     /// robot stands for its first view.
     pub(super) fn begin_locate(&mut self) {
-        self.locating = Procedure::new();
-        self.after_locate = None;
-        self.mode = Mode::Locate { drive: self.model.stop(), timer: Timer::new(Some(cfg::TIME_LIMIT_MS)) };
+        self.localizing = Localizing::new();
+        self.mode = Mode::Locate { drive: self.model.stop(), timer: Timer::new(Some(config::locate::TIME_LIMIT_MS)) };
     }
 
     /// While locating, this tick's readings go to the procedure's view
     /// (the estimator starts afresh from its fix).
     pub(super) fn take_view_readings(&mut self) {
-        let p = &mut self.locating;
-        if let Some(d) = self.pending_front.take() {
+        let p = &mut self.localizing.survey;
+        if let Some(d) = self.front.pending.take() {
             p.lidar(LidarId::Front, d);
         }
-        if let Some(d) = self.pending_right.take() {
+        if let Some(d) = self.right.pending.take() {
             p.lidar(LidarId::Right, d);
         }
-        if let Some(h) = self.pending_heading.take() {
+        if let Some(h) = self.compass.pending.take() {
             p.heading(h);
         }
     }
 
     /// One tick of the procedure: stand, turn, or its answer.
     pub(super) fn locate_tick(&mut self, sink: &mut impl LineSink) {
-        let motion = match self.locating.tick(&self.estimator.arena()) {
-            Step::Done(result) => return self.end_locate(result, sink),
-            Step::Stand => Motion::Stop,
-            Step::Turn { clockwise } => {
-                let rate = TurnRate::from_mrad_s(cfg::TURN_MRAD_S);
+        let motion = match self.localizing.survey.tick(&self.estimator.arena()) {
+            Action::Done(result) => return self.end_locate(result, sink),
+            Action::Stand => Motion::Stop,
+            Action::Turn { clockwise } => {
+                let rate = TurnRate::from_mrad_s(config::locate::TURN_MRAD_S);
                 Motion::Turn(if clockwise { rate } else { rate.neg() })
             }
         };
@@ -81,9 +86,8 @@ where
         if matches!(self.mode, Mode::Locate { .. }) {
             self.mode = Mode::Idle;
         }
-        let views = self.locating.views().len();
-        self.locating = Procedure::new();
-        let then = self.after_locate.take();
+        let views = self.localizing.survey.views().len();
+        let then = core::mem::replace(&mut self.localizing, Localizing::new()).then;
         match result {
             Ok(fix) => {
                 self.estimator.start_at(&fix);
@@ -110,7 +114,7 @@ where
     }
 
     /// `# located x y heading sigma sx sy views n [ambiguous]`: mm, degrees.
-    fn report_fix(&mut self, fix: &Fix, views: usize, sink: &mut impl LineSink) {
+    pub(super) fn report_fix(&mut self, fix: &Fix, views: usize, sink: &mut impl LineSink) {
         let mm = |l: crate::math::Length| l.0 >> 16;
         let o = &mut self.out;
         o.clear();

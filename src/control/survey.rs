@@ -1,34 +1,34 @@
-//! The robot's localization procedure, on `locate` (and `reset`) and at
-//! power-up ([`cfg::AT_POWER_UP`]): views taken standing, with turns in
+//! The survey: how the robot finds where it is, on `locate` (and `reset`)
+//! and at power-up ([`config::locate::AT_POWER_UP`]): views taken standing, with turns in
 //! place between them, and the search of the box for the poses that
 //! explain them ([`crate::model::locate`]), a few grid columns per tick.
 //!
-//! 1. A view: the compass's heading, the mean of [`cfg::COMPASS_READINGS`]
+//! 1. A view: the compass's heading, the mean of [`config::locate::COMPASS_READINGS`]
 //!    readings, and each lidar's distance, the median of
-//!    [`cfg::LIDAR_READINGS`], taken standing (at most
-//!    [`cfg::VIEW_LIMIT_MS`]).
-//! 2. A turn in place of [`cfg::TURN_DEG`], clockwise first, a settle of
-//!    [`cfg::SETTLE_MS`], and the next view. When the compass shows that a
-//!    turn moved less than [`cfg::BLOCKED_TURN_DEG`] (the body against a
+//!    [`config::locate::LIDAR_READINGS`], taken standing (at most
+//!    [`config::locate::VIEW_LIMIT_MS`]).
+//! 2. A turn in place of [`config::locate::TURN_DEG`], clockwise first, a settle of
+//!    [`config::locate::SETTLE_MS`], and the next view. When the compass shows that a
+//!    turn moved less than [`config::locate::BLOCKED_TURN_DEG`] (the body against a
 //!    wall), the next turns go the other way.
-//! 3. From [`cfg::MIN_VIEWS`] views on, the search after each view
-//!    ([`cfg::COLUMNS_PER_TICK`] columns a tick): a fix that is not
+//! 3. From [`config::locate::MIN_VIEWS`] views on, the search after each view
+//!    ([`config::locate::COLUMNS_PER_TICK`] columns a tick): a fix that is not
 //!    ambiguous and is certain enough for `goto`
 //!    ([`crate::config::goto::MAX_SIGMA_MM`]) ends the procedure;
 //!    otherwise (ambiguous, too uncertain, or nothing fits) another turn
 //!    and view, up to [`MAX_VIEWS`], whose answer is taken as it is (an
 //!    ambiguous fix says so).
 //!
-//! `tests/locate.rs` measures this procedure on the realistic simulator's
+//! `tests/locate.rs` measures this survey on the realistic simulator's
 //! sensors (99.2 % right from random starts); `tests/localize.rs` runs it
 //! in the loop.
 //!
-//! The procedure owns no hardware and no clock: the loop hands it the
-//! readings ([`Procedure::lidar`], [`Procedure::heading`]) and calls
-//! [`Procedure::tick`] once per tick, which says whether to stand or turn,
+//! The survey owns no hardware and no clock: the loop hands it the
+//! readings ([`Survey::lidar`], [`Survey::heading`]) and calls
+//! [`Survey::tick`] once per tick, which says whether to stand or turn,
 //! or gives the answer.
 
-use crate::config::locate as cfg;
+use crate::config;
 use crate::config::timing::LOOP_HZ;
 use crate::control::goto::position_steerable;
 use crate::math::{div_i64, Angle, Length};
@@ -44,7 +44,7 @@ pub enum Failure {
     NoRange,
     /// No pose in the box explains the views (an obstacle, another box).
     NothingFits,
-    /// [`cfg::TIME_LIMIT_MS`] ran out.
+    /// [`config::locate::TIME_LIMIT_MS`] ran out.
     OutOfTime,
     /// A command came (it runs instead).
     Interrupted,
@@ -74,9 +74,9 @@ impl From<LocateError> for Failure {
 
 /// What the body does this tick, or the procedure's answer.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
-pub enum Step {
+pub enum Action {
     Stand,
-    /// Turn in place at [`cfg::TURN_MRAD_S`].
+    /// Turn in place at [`config::locate::TURN_MRAD_S`].
     Turn {
         clockwise: bool,
     },
@@ -96,7 +96,7 @@ enum Phase {
 }
 
 /// One lidar's distances in a view.
-type Distances = heapless::Vec<Length, { cfg::LIDAR_READINGS as usize }>;
+type Distances = heapless::Vec<Length, { config::locate::LIDAR_READINGS as usize }>;
 
 /// A view's readings as they come.
 #[derive(Clone, Default, Debug)]
@@ -112,7 +112,7 @@ struct ViewSums {
 
 impl ViewSums {
     fn complete(&self) -> bool {
-        self.front.is_full() && self.right.is_full() && self.headings >= cfg::COMPASS_READINGS
+        self.front.is_full() && self.right.is_full() && self.headings >= config::locate::COMPASS_READINGS
     }
 
     /// The view: the lidars' medians (a glancing beam's spurious echo
@@ -154,16 +154,16 @@ const fn ticks(ms: u32) -> u32 {
 
 /// Ticks of one turn between views: the angle over the rate (urad per
 /// degree over mrad/s is ms).
-const TURN_TICKS: u32 = ticks((cfg::TURN_DEG * 17_453 / cfg::TURN_MRAD_S) as u32);
-const SETTLE_TICKS: u32 = ticks(cfg::SETTLE_MS);
-const VIEW_TICKS: u32 = ticks(cfg::VIEW_LIMIT_MS);
+const TURN_TICKS: u32 = ticks((config::locate::TURN_DEG * 17_453 / config::locate::TURN_MRAD_S) as u32);
+const SETTLE_TICKS: u32 = ticks(config::locate::SETTLE_MS);
+const VIEW_TICKS: u32 = ticks(config::locate::VIEW_LIMIT_MS);
 /// The blocked-turn threshold in angle LSB (2^32 per turn).
-const BLOCKED: i32 = (cfg::BLOCKED_TURN_DEG as i64 * (1 << 32) / 360) as i32;
-const _: () = assert!(cfg::MIN_VIEWS >= 1 && cfg::MIN_VIEWS <= MAX_VIEWS && TURN_TICKS > 0);
+const BLOCKED: i32 = (config::locate::BLOCKED_TURN_DEG as i64 * (1 << 32) / 360) as i32;
+const _: () = assert!(config::locate::MIN_VIEWS >= 1 && config::locate::MIN_VIEWS <= MAX_VIEWS && TURN_TICKS > 0);
 
 /// The procedure (see the module docs).
 #[derive(Clone, Debug)]
-pub struct Procedure {
+pub struct Survey {
     views: [Readings; MAX_VIEWS],
     count: usize,
     phase: Phase,
@@ -173,16 +173,16 @@ pub struct Procedure {
     view: ViewSums,
 }
 
-impl Default for Procedure {
+impl Default for Survey {
     fn default() -> Self {
-        Procedure::new()
+        Survey::new()
     }
 }
 
-impl Procedure {
+impl Survey {
     /// A procedure about to take its first view.
-    pub const fn new() -> Procedure {
-        Procedure {
+    pub const fn new() -> Survey {
+        Survey {
             views: [Readings { heading: Angle::ZERO, front: None, right: None }; MAX_VIEWS],
             count: 0,
             phase: Phase::View,
@@ -204,7 +204,7 @@ impl Procedure {
     }
 
     /// A lidar's distance (the lidar model's output); kept while a view is
-    /// being taken, up to [`cfg::LIDAR_READINGS`].
+    /// being taken, up to [`config::locate::LIDAR_READINGS`].
     pub fn lidar(&mut self, id: LidarId, d: Length) {
         let distances = match id {
             LidarId::Front => &mut self.view.front,
@@ -217,10 +217,10 @@ impl Procedure {
     }
 
     /// A compass heading; kept while a view is being taken, up to
-    /// [`cfg::COMPASS_READINGS`].
+    /// [`config::locate::COMPASS_READINGS`].
     pub fn heading(&mut self, h: Angle) {
         let v = &mut self.view;
-        if !matches!(self.phase, Phase::View) || v.headings >= cfg::COMPASS_READINGS {
+        if !matches!(self.phase, Phase::View) || v.headings >= config::locate::COMPASS_READINGS {
             return;
         }
         let first = *v.first_heading.get_or_insert(h);
@@ -229,29 +229,29 @@ impl Procedure {
     }
 
     /// One loop tick: what the body does, or the answer.
-    pub fn tick(&mut self, arena: &Arena) -> Step {
+    pub fn tick(&mut self, arena: &Arena) -> Action {
         self.ticks = self.ticks.saturating_add(1);
         match &mut self.phase {
             Phase::View if self.view.complete() || self.ticks > VIEW_TICKS => self.view_taken(),
-            Phase::View => Step::Stand,
+            Phase::View => Action::Stand,
             Phase::Turn if self.ticks > TURN_TICKS => self.enter(Phase::Settle),
-            Phase::Turn => Step::Turn { clockwise: self.clockwise },
+            Phase::Turn => Action::Turn { clockwise: self.clockwise },
             Phase::Settle if self.ticks > SETTLE_TICKS => {
                 self.view = ViewSums::default();
                 self.enter(Phase::View)
             }
-            Phase::Settle => Step::Stand,
-            Phase::Search(search) => match search.step(arena, cfg::COLUMNS_PER_TICK) {
-                None => Step::Stand,
+            Phase::Settle => Action::Stand,
+            Phase::Search(search) => match search.step(arena, config::locate::COLUMNS_PER_TICK) {
+                None => Action::Stand,
                 Some(result) => self.searched(result.map_err(Failure::from)),
             },
         }
     }
 
     /// A view is in: kept, then a search or another turn.
-    fn view_taken(&mut self) -> Step {
+    fn view_taken(&mut self) -> Action {
         let Some(r) = self.view.readings() else {
-            return Step::Done(Err(Failure::NoHeading));
+            return Action::Done(Err(Failure::NoHeading));
         };
         if let Some(previous) = self.views().last() {
             if r.heading.diff(previous.heading).saturating_abs() < BLOCKED {
@@ -262,7 +262,7 @@ impl Procedure {
             *slot = r;
             self.count = self.count.saturating_add(1);
         }
-        if self.count < cfg::MIN_VIEWS {
+        if self.count < config::locate::MIN_VIEWS {
             return self.enter(Phase::Turn);
         }
         match Search::new(self.views()) {
@@ -272,21 +272,21 @@ impl Procedure {
     }
 
     /// A search's answer: the end, or another view.
-    fn searched(&mut self, result: Result<Fix, Failure>) -> Step {
+    fn searched(&mut self, result: Result<Fix, Failure>) -> Action {
         let last_view = self.count >= MAX_VIEWS;
         match result {
             // (the fix's heading is the compass's, within goto's limit)
             Ok(fix) if (!fix.ambiguous && position_steerable(fix.sigma_x, fix.sigma_y, 1)) || last_view => {
-                Step::Done(Ok(fix))
+                Action::Done(Ok(fix))
             }
-            Err(e) if last_view => Step::Done(Err(e)),
+            Err(e) if last_view => Action::Done(Err(e)),
             _ => self.enter(Phase::Turn),
         }
     }
 
-    fn enter(&mut self, phase: Phase) -> Step {
+    fn enter(&mut self, phase: Phase) -> Action {
         self.phase = phase;
         self.ticks = 0;
-        Step::Stand
+        Action::Stand
     }
 }
