@@ -4,6 +4,7 @@
 
 use super::arena::Arena;
 use super::body::PoseF64;
+use crate::model::lidar::LidarMount;
 use std::fmt::Write;
 use std::string::String;
 
@@ -28,6 +29,18 @@ pub struct Ray<'a> {
     pub from: (f64, f64),
     pub to: (f64, f64),
     pub color: &'a str,
+}
+
+impl<'a> Ray<'a> {
+    /// A reading of the lidar at `mount` on the body at `pose`: `distance_mm`
+    /// is the lidar model's distance from the reference point along the
+    /// beam, so the beam ends that far from the reference point's foot on
+    /// the beam, i.e. the distance less the mount's setback from the lidar.
+    pub fn of_reading(pose: &PoseF64, mount: &LidarMount, distance_mm: f64, color: &'a str) -> Ray<'a> {
+        let (x, y, dir) = pose.lidar_ray(mount);
+        let range = distance_mm - PoseF64::along_beam_mm(mount);
+        Ray { from: (x, y), to: (x + range * dir.cos(), y + range * dir.sin()), color }
+    }
 }
 
 /// Renders the arena and the tracks as a standalone SVG document.

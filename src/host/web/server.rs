@@ -1,0 +1,287 @@
+//! The page's server: one TCP port for the page, its script and the
+//! WebSocket the page opens, a thread per connection (blocking std I/O,
+//! like the rest of the tool).
+//!
+//! Each connection's request head is read with tungstenite's own HTTP
+//! request parser; a WebSocket upgrade to `/ws` is handed to tungstenite's
+//! server handshake, anything else is answered with tungstenite's response
+//! writer (`write_response`, an `http::Response`): the page's files are
+//! compiled in ([`FILES`]), so it works offline and needs no CDN. Why not a
+//! general HTTP server crate: tiny_http's upgraded connection is an opaque
+//! blocking stream (no read timeout), so one thread could not both wait for
+//! the page's commands and push rows as they arrive; with the `TcpStream`
+//! ours, the connection's thread polls both.
+//!
+//! The connection threads and the tool's loop talk through channels: a
+//! connection reports [`Event`]s (joined with its queue, a valid command,
+//! left); the loop writes the page's messages into that queue. A malformed
+//! message closes the connection with its reason (close code 1008, or
+//! 1003 for binary data) and reaches nothing else.
+
+use std::format;
+use std::io::{self, ErrorKind, Read, Write};
+use std::net::{Shutdown, SocketAddr, TcpListener, TcpStream};
+use std::string::{String, ToString};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::mpsc::{self, Receiver, Sender, SyncSender, TryRecvError};
+use std::sync::Arc;
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+use std::vec::Vec;
+
+use tungstenite::handshake::machine::TryParse;
+use tungstenite::handshake::server::{write_response, Request};
+use tungstenite::http::{Response, StatusCode};
+use tungstenite::protocol::frame::coding::CloseCode;
+use tungstenite::protocol::{CloseFrame, WebSocketConfig};
+use tungstenite::{Message, WebSocket};
+
+use super::command::{parse_command, Command};
+use crate::config::teleop::{WEB_MAX_MESSAGE, WEB_QUEUE};
+
+/// The page's files: path, content type, content.
+pub const FILES: &[(&str, &str, &str)] = &[
+    ("/", "text/html; charset=utf-8", include_str!("page/index.html")),
+    ("/app.js", "text/javascript; charset=utf-8", include_str!("page/app.js")),
+    ("/style.css", "text/css; charset=utf-8", include_str!("page/style.css")),
+];
+
+/// The WebSocket's path.
+pub const WS_PATH: &str = "/ws";
+
+/// How long a connection may take to send its request head.
+const HEAD_TIMEOUT: Duration = Duration::from_secs(5);
+/// Largest request head read, bytes.
+const MAX_HEAD: usize = 8 * 1024;
+/// A connection's poll period: how long a read waits for the page before
+/// the queue is written out again (rows leave within this of arriving).
+const POLL: Duration = Duration::from_millis(5);
+/// A page that takes this long to take a message is gone.
+const WRITE_TIMEOUT: Duration = Duration::from_secs(2);
+
+/// What a connection tells the tool's loop.
+#[derive(Debug)]
+pub enum Event {
+    /// A page's WebSocket is open; the loop writes its messages into `tx`.
+    Joined { id: u64, tx: SyncSender<Arc<str>> },
+    /// A valid command from that page.
+    Command { id: u64, cmd: Command },
+    /// The page's connection ended (closed, lost, or closed for a malformed message).
+    Left { id: u64 },
+}
+
+/// A bound port, not yet serving.
+pub struct WebServer {
+    listener: TcpListener,
+    addr: SocketAddr,
+}
+
+/// True for an address only this machine reaches.
+pub fn is_loopback(addr: &SocketAddr) -> bool {
+    addr.ip().is_loopback()
+}
+
+impl WebServer {
+    /// Binds `addr` (`ADDR:PORT`); a port in use or a bad address is an
+    /// error that says so.
+    pub fn bind(addr: &str) -> Result<WebServer, String> {
+        let listener = TcpListener::bind(addr).map_err(|e| match e.kind() {
+            ErrorKind::AddrInUse => format!(
+                "--web {addr}: the port is in use (another teleop --web, or another server?); \
+                 pick another, e.g. --web 127.0.0.1:8081"
+            ),
+            ErrorKind::AddrNotAvailable => format!("--web {addr}: no such address on this machine"),
+            ErrorKind::PermissionDenied => format!("--web {addr}: not allowed (ports below 1024 need root)"),
+            _ => format!("--web {addr}: {e} (wants ADDR:PORT, e.g. 127.0.0.1:8080)"),
+        })?;
+        let addr = listener.local_addr().map_err(|e| format!("--web {addr}: {e}"))?;
+        Ok(WebServer { listener, addr })
+    }
+
+    pub fn local_addr(&self) -> SocketAddr {
+        self.addr
+    }
+
+    /// Serves until `stop` is set: accepts connections, each on its own
+    /// thread, reporting to `events`.
+    pub fn start(self, events: Sender<Event>, stop: Arc<AtomicBool>) -> io::Result<JoinHandle<()>> {
+        self.listener.set_nonblocking(true)?;
+        let ids = AtomicU64::new(1);
+        Ok(std::thread::spawn(move || {
+            while !stop.load(Ordering::Relaxed) {
+                match self.listener.accept() {
+                    Ok((stream, _)) => {
+                        let id = ids.fetch_add(1, Ordering::Relaxed);
+                        let (events, stop) = (events.clone(), Arc::clone(&stop));
+                        std::thread::spawn(move || {
+                            let _ = connection(stream, id, &events, &stop);
+                        });
+                    }
+                    Err(e) if e.kind() == ErrorKind::WouldBlock => std::thread::sleep(Duration::from_millis(10)),
+                    Err(_) => std::thread::sleep(Duration::from_millis(10)),
+                }
+            }
+        }))
+    }
+}
+
+/// Waits until the request head has arrived (peeking, so tungstenite's
+/// handshake reads it again), returns it and its length.
+fn peek_head(stream: &TcpStream) -> io::Result<Option<(usize, Request)>> {
+    let start = Instant::now();
+    let mut buf = std::vec![0u8; MAX_HEAD];
+    loop {
+        let n = stream.peek(&mut buf)?;
+        match Request::try_parse(buf.get(..n).unwrap_or(&[])) {
+            Ok(Some(parsed)) => return Ok(Some(parsed)),
+            Ok(None) if n > 0 && n < MAX_HEAD && start.elapsed() < HEAD_TIMEOUT => {}
+            Ok(None) if n == 0 => return Ok(None), // closed before a request
+            _ => return Ok(None),
+        }
+        std::thread::sleep(Duration::from_millis(2));
+    }
+}
+
+fn respond(stream: &mut TcpStream, status: StatusCode, content_type: &str, body: &[u8]) -> io::Result<()> {
+    let response = Response::builder()
+        .status(status)
+        .header("Content-Type", content_type)
+        .header("Content-Length", body.len().to_string())
+        .header("Cache-Control", "no-store")
+        .header("Connection", "close")
+        .body(())
+        .map_err(io::Error::other)?;
+    write_response(&mut *stream, &response).map_err(io::Error::other)?;
+    stream.write_all(body)?;
+    stream.flush()
+}
+
+fn is_upgrade(req: &Request) -> bool {
+    req.headers().get("upgrade").and_then(|v| v.to_str().ok()).is_some_and(|v| v.eq_ignore_ascii_case("websocket"))
+}
+
+/// One connection: a file, or the page's WebSocket.
+fn connection(mut stream: TcpStream, id: u64, events: &Sender<Event>, stop: &AtomicBool) -> io::Result<()> {
+    stream.set_nonblocking(false)?;
+    stream.set_read_timeout(Some(HEAD_TIMEOUT))?;
+    stream.set_write_timeout(Some(WRITE_TIMEOUT))?;
+    let _ = stream.set_nodelay(true);
+    let Some((len, req)) = peek_head(&stream)? else {
+        return Ok(());
+    };
+    let path = req.uri().path().to_string();
+    if is_upgrade(&req) && path == WS_PATH {
+        let config = WebSocketConfig::default().max_message_size(Some(64 * 1024)).max_frame_size(Some(64 * 1024));
+        let ws = tungstenite::accept_with_config(stream, Some(config)).map_err(io::Error::other)?;
+        return page(ws, id, events, stop);
+    }
+    // a plain request: its head is read (the peer sees our answer, not a
+    // reset for unread bytes), answered, and the connection closed
+    let mut head = std::vec![0u8; len];
+    stream.read_exact(&mut head)?;
+    let result = if req.method() != "GET" && req.method() != "HEAD" {
+        respond(&mut stream, StatusCode::METHOD_NOT_ALLOWED, "text/plain", b"GET only\n")
+    } else {
+        match FILES.iter().find(|(p, _, _)| *p == path) {
+            Some((_, ctype, body)) => respond(&mut stream, StatusCode::OK, ctype, body.as_bytes()),
+            None => respond(&mut stream, StatusCode::NOT_FOUND, "text/plain", b"not found\n"),
+        }
+    };
+    let _ = stream.shutdown(Shutdown::Write);
+    result
+}
+
+/// Why a page's connection is closed by the server.
+fn close(ws: &mut WebSocket<TcpStream>, code: CloseCode, reason: &str) {
+    let reason: String = reason.chars().take(120).collect();
+    let _ = ws.close(Some(CloseFrame { code, reason: reason.into() }));
+    // let the close frame go out and the page answer it, briefly
+    let until = Instant::now() + Duration::from_millis(200);
+    while Instant::now() < until {
+        match ws.read() {
+            Err(tungstenite::Error::Io(e)) if matches!(e.kind(), ErrorKind::WouldBlock | ErrorKind::TimedOut) => {}
+            Err(_) => break,
+            Ok(_) => {}
+        }
+    }
+}
+
+/// A page's WebSocket: reports its commands, writes its queue.
+fn page(mut ws: WebSocket<TcpStream>, id: u64, events: &Sender<Event>, stop: &AtomicBool) -> io::Result<()> {
+    ws.get_mut().set_read_timeout(Some(POLL))?;
+    let (tx, rx): (SyncSender<Arc<str>>, Receiver<Arc<str>>) = mpsc::sync_channel(WEB_QUEUE);
+    if events.send(Event::Joined { id, tx }).is_err() {
+        close(&mut ws, CloseCode::Away, "teleop is quitting");
+        return Ok(());
+    }
+    let result = serve_page(&mut ws, id, &rx, events, stop);
+    let _ = events.send(Event::Left { id });
+    result
+}
+
+fn serve_page(
+    ws: &mut WebSocket<TcpStream>,
+    id: u64,
+    rx: &Receiver<Arc<str>>,
+    events: &Sender<Event>,
+    stop: &AtomicBool,
+) -> io::Result<()> {
+    loop {
+        match ws.read() {
+            Ok(Message::Text(text)) => match parse_command(text.as_str()) {
+                Ok(cmd) => {
+                    if events.send(Event::Command { id, cmd }).is_err() {
+                        close(ws, CloseCode::Away, "teleop is quitting");
+                        return Ok(());
+                    }
+                }
+                Err(why) => {
+                    close(ws, CloseCode::Policy, &why);
+                    return Ok(());
+                }
+            },
+            Ok(Message::Binary(_)) => {
+                close(ws, CloseCode::Unsupported, "binary messages are not understood: send JSON text");
+                return Ok(());
+            }
+            Ok(Message::Close(_)) => return Ok(()),
+            Ok(_) => {} // ping, pong: tungstenite answers
+            Err(tungstenite::Error::Io(e)) if matches!(e.kind(), ErrorKind::WouldBlock | ErrorKind::TimedOut) => {}
+            Err(tungstenite::Error::Capacity(_)) => {
+                close(ws, CloseCode::Size, &format!("message too long: at most {WEB_MAX_MESSAGE} bytes"));
+                return Ok(());
+            }
+            Err(tungstenite::Error::ConnectionClosed | tungstenite::Error::AlreadyClosed) => return Ok(()),
+            Err(e) => return Err(io::Error::other(e)),
+        }
+        if stop.load(Ordering::Relaxed) {
+            close(ws, CloseCode::Away, "teleop is quitting");
+            return Ok(());
+        }
+        // the queue, written out: rows leave within a poll period
+        let mut wrote = false;
+        loop {
+            match rx.try_recv() {
+                Ok(text) => {
+                    ws.write(Message::text(text.as_ref())).map_err(io::Error::other)?;
+                    wrote = true;
+                }
+                Err(TryRecvError::Empty) => break,
+                Err(TryRecvError::Disconnected) => {
+                    ws.flush().map_err(io::Error::other)?;
+                    close(ws, CloseCode::Away, "teleop is quitting");
+                    return Ok(());
+                }
+            }
+        }
+        if wrote {
+            ws.flush().map_err(io::Error::other)?;
+        }
+    }
+}
+
+/// Every file the page needs, with its path (tests check the page loads
+/// nothing else).
+pub fn file_paths() -> Vec<&'static str> {
+    FILES.iter().map(|(p, _, _)| *p).collect()
+}
