@@ -129,13 +129,14 @@ impl Live {
 
     /// The first message a page gets.
     pub fn hello(&self, role: Role) -> Value {
-        let g = &config::geometry::ROTATION_TO_REFERENCE;
-        let d = g.to_mm_f64();
+        let d = config::geometry::ROTATION_TO_REFERENCE.to_mm_f64();
         let half = config::geometry::AXLE_LENGTH.to_mm_f64() / 2.0;
         let skid = config::geometry::SKID_BEHIND_AXLE.to_mm_f64();
         // the body in its own frame (forward, right) mm from the reference
-        // point: the nose, the wheels beside the axle, the skid behind
-        let body = [[0.0, -half], [0.0, half], [-d, half], [-d - skid, 0.0], [-d, -half]];
+        // point (the nose): a point ahead shows the heading, the sides run
+        // back past the wheels on the axle to the skid
+        let body = [[15.0, 0.0], [0.0, half], [-d - skid, half], [-d - skid, -half], [0.0, -half]];
+        let wheels = [[-d, -half], [-d, half]];
         let lidars: Vec<Value> = LIDARS
             .iter()
             .map(|(name, color, m)| {
@@ -147,6 +148,7 @@ impl Live {
             "role": role.word(),
             "arena": { "x": self.arena.0, "y": self.arena.1 },
             "body": body,
+            "wheels": wheels,
             "lidars": lidars,
             "refresh_ms": config::teleop::REFRESH_MS,
             "hold_ms": config::teleop::WEB_HOLD_MS,

@@ -37,14 +37,16 @@ function drawBody(g, scale = 1) {
   g.replaceChildren();
   const pts = state.hello.body.map(([f, r]) => `${r * scale},${-f * scale}`).join(" ");
   el("polygon", { class: "body", points: pts }, g);
-  el("line", { class: "nose", x1: 0, y1: 0, x2: 0, y2: -30 * scale }, g);
+  for (const [f, r] of state.hello.wheels) {
+    el("line", { class: "wheel", x1: r * scale, x2: r * scale, y1: -(f - 20) * scale, y2: -(f + 20) * scale }, g);
+  }
   el("circle", { r: 3, cx: 0, cy: 0, class: "nose", fill: "none" }, g);
 }
 
 function place(g, pose) {
   const [sx, sy] = px(pose.x, pose.y);
   g.setAttribute("transform", `translate(${sx.toFixed(2)} ${sy.toFixed(2)}) rotate(${pose.heading.toFixed(2)})`);
-  g.hidden = false;
+  g.style.display = "";
 }
 
 function onHello(h) {
@@ -239,5 +241,8 @@ document.addEventListener("keyup", (e) => {
 document.addEventListener("visibilitychange", () => { if (document.hidden) release(); });
 window.addEventListener("blur", release);
 window.addEventListener("pagehide", release);
+
+// a bug in this page shows itself instead of freezing the map silently
+window.addEventListener("error", (e) => notice(`page error: ${e.message} (${e.lineno})`));
 
 connect();

@@ -1,0 +1,276 @@
+//! End to end in a real browser: the simulated robot served on a PTY as
+//! `sim_pty --truth-hz 50` serves it, `teleop --web`'s loop on that PTY
+//! (`host::web::run`, what the example calls), and Debian's headless
+//! Chromium driven through its DevTools protocol (over tungstenite):
+//! - the page loads, is the pilot, and draws the robot where the simulator
+//!   has it (the drawn SVG transform, read back, within 3 mm and 3 degrees);
+//! - a press on the page's "forward" button moves the simulated robot;
+//! - closing the tab while the button is held stops the robot within the
+//!   500 ms deadman (the true pose stops changing);
+//! - a screenshot is saved (target/web-e2e.png; docs/web.png is one).
+//!
+//! Needs `chromium` (apt-get install chromium); without it the test says
+//! so loudly and passes, unless PAPERBOT_REQUIRE_CHROMIUM is set (CI sets it).
+
+use std::io::{BufRead, BufReader};
+use std::net::TcpStream;
+use std::process::{Child, Command, Stdio};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+use paperbot::config;
+use paperbot::host::web::{self, WebOptions, WebServer};
+use paperbot::sim::body::PoseF64;
+use paperbot::sim::robot::{Noise, SimConfig, SimRobot};
+use paperbot::sim::serve::Server;
+use serde_json::{json, Value};
+use serialport::{SerialPort, TTYPort};
+use tungstenite::stream::MaybeTlsStream;
+use tungstenite::{Message, WebSocket};
+
+type Ws = WebSocket<MaybeTlsStream<TcpStream>>;
+
+/// A DevTools protocol connection to the browser, attached to one page.
+struct Cdp {
+    ws: Ws,
+    next: u64,
+    session: Option<String>,
+}
+
+impl Cdp {
+    fn call(&mut self, method: &str, params: Value) -> Value {
+        self.next += 1;
+        let id = self.next;
+        let mut msg = json!({ "id": id, "method": method, "params": params });
+        if let Some(s) = &self.session {
+            msg["sessionId"] = json!(s);
+        }
+        self.ws.send(Message::text(msg.to_string())).expect("send to chromium");
+        loop {
+            let m = self.ws.read().unwrap_or_else(|e| panic!("{method}: no answer from chromium: {e}"));
+            let Ok(text) = m.into_text() else { continue };
+            let v: Value = serde_json::from_str(text.as_str()).expect("chromium sends JSON");
+            if v["id"] == json!(id) {
+                assert!(v.get("error").is_none(), "{method}: {}", v["error"]);
+                return v["result"].clone();
+            }
+        }
+    }
+
+    /// Evaluates `expr` in the page, returns its value.
+    fn eval(&mut self, expr: &str) -> Value {
+        let r = self.call("Runtime.evaluate", json!({ "expression": expr, "returnByValue": true }));
+        assert!(r.get("exceptionDetails").is_none(), "{expr}: {}", r["exceptionDetails"]);
+        r["result"]["value"].clone()
+    }
+
+    fn mouse(&mut self, kind: &str, x: f64, y: f64) {
+        self.call(
+            "Input.dispatchMouseEvent",
+            json!({ "type": kind, "x": x, "y": y, "button": "left", "buttons": 1, "clickCount": 1 }),
+        );
+    }
+}
+
+/// The true poses the page's server relays (`truth` messages), with when
+/// they arrived; read by a second page (a watcher) on its own thread.
+type Truths = Arc<Mutex<Vec<(Instant, PoseF64)>>>;
+
+fn watch_truth(url: &str, stop: Arc<AtomicBool>) -> Truths {
+    let truths: Truths = Arc::default();
+    let (mut ws, _) = tungstenite::connect(url).expect("the watcher connects");
+    if let MaybeTlsStream::Plain(s) = ws.get_mut() {
+        s.set_read_timeout(Some(Duration::from_millis(50))).unwrap();
+    }
+    let t = Arc::clone(&truths);
+    std::thread::spawn(move || {
+        while !stop.load(Ordering::Relaxed) {
+            let Ok(Message::Text(text)) = ws.read() else { continue };
+            let v: Value = serde_json::from_str(text.as_str()).unwrap();
+            if v["type"] == "hello" {
+                assert_eq!(v["role"], "viewer", "the watcher connects second: it only watches");
+            }
+            if v["type"] == "truth" {
+                let p = &v["pose"];
+                let pose = PoseF64::new(
+                    p["x"].as_f64().unwrap(),
+                    p["y"].as_f64().unwrap(),
+                    p["heading"].as_f64().unwrap().to_radians(),
+                );
+                t.lock().unwrap().push((Instant::now(), pose));
+            }
+        }
+    });
+    truths
+}
+
+fn latest(t: &Truths) -> PoseF64 {
+    t.lock().unwrap().last().expect("truth lines arrive").1
+}
+
+fn chromium() -> Option<String> {
+    ["chromium", "chromium-browser", "google-chrome"].into_iter().map(String::from).find(|c| {
+        Command::new(c).arg("--version").stdout(Stdio::null()).stderr(Stdio::null()).status().is_ok_and(|s| s.success())
+    })
+}
+
+/// Starts headless Chromium with an empty profile; returns it and its DevTools URL.
+fn start_chromium(bin: &str, profile: &std::path::Path) -> (Child, String) {
+    let mut child = Command::new(bin)
+        .args([
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--disable-quic",
+            "--no-first-run",
+            "--disable-background-networking",
+            "--disable-component-update",
+            "--disable-sync",
+            "--remote-debugging-port=0",
+            "--window-size=1280,800",
+        ])
+        .arg(format!("--user-data-dir={}", profile.display()))
+        .arg("about:blank")
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("chromium starts");
+    let mut lines = BufReader::new(child.stderr.take().unwrap()).lines();
+    let url = loop {
+        let line = lines.next().expect("chromium says where DevTools listen").unwrap();
+        if let Some(u) = line.strip_prefix("DevTools listening on ") {
+            break u.trim().to_string();
+        }
+    };
+    // keep draining its stderr so it never blocks on a full pipe
+    std::thread::spawn(move || lines.for_each(drop));
+    (child, url)
+}
+
+/// The robot's drawn pose, from the SVG transform of `#robot`:
+/// `translate(y_mm, L - x_mm) rotate(heading_deg)`.
+fn drawn_pose(cdp: &mut Cdp, length_x: f64) -> Option<PoseF64> {
+    let t = cdp.eval("document.getElementById('robot')?.getAttribute('transform') ?? null");
+    let t = t.as_str()?;
+    let nums: Vec<f64> = t
+        .split(|c: char| !(c.is_ascii_digit() || c == '.' || c == '-'))
+        .filter(|s| !s.is_empty())
+        .map(|s| s.parse().unwrap())
+        .collect();
+    let [sx, sy, deg] = nums[..] else { panic!("transform {t:?}") };
+    Some(PoseF64::new(length_x - sy, sx, deg.to_radians()))
+}
+
+fn wait_for<T>(what: &str, ms: u64, mut f: impl FnMut() -> Option<T>) -> T {
+    let start = Instant::now();
+    loop {
+        if let Some(v) = f() {
+            return v;
+        }
+        assert!(start.elapsed() < Duration::from_millis(ms), "timed out waiting for {what}");
+        std::thread::sleep(Duration::from_millis(50));
+    }
+}
+
+#[test]
+fn the_page_draws_drives_and_a_closed_tab_stops_the_robot() {
+    let Some(bin) = chromium() else {
+        let msg = "\n\n!!!!! tests/web_browser.rs SKIPPED: no chromium (apt-get install chromium) !!!!!\n\n";
+        assert!(std::env::var_os("PAPERBOT_REQUIRE_CHROMIUM").is_none(), "{msg}");
+        eprintln!("{msg}");
+        return;
+    };
+    // the simulator on a PTY, as sim_pty --no-noise --truth-hz 50 serves it
+    let start = PoseF64::new(200.0, 250.0, 0.0);
+    let cfg = SimConfig { noise: Noise::OFF, locate_at_power_up: false, start, ..SimConfig::default() };
+    let (mut master, slave) = TTYPort::pair().expect("a pseudo-terminal");
+    master.set_timeout(Duration::ZERO).unwrap();
+    let path = slave.name().unwrap();
+    let stop = Arc::new(AtomicBool::new(false));
+    let sim_stop = Arc::clone(&stop);
+    let sim = std::thread::spawn(move || {
+        let mut server = Server::new(SimRobot::new(cfg)).with_truth(50);
+        server.run(&mut master, &sim_stop).expect("the simulator runs");
+        drop(slave);
+    });
+    // teleop --web on it
+    let server = WebServer::bind("127.0.0.1:0").unwrap();
+    let addr = server.local_addr();
+    let web_stop = Arc::clone(&stop);
+    let tool = std::thread::spawn(move || {
+        let mut port = serialport::new(&path, config::serial::BAUD).timeout(Duration::from_millis(5)).open().unwrap();
+        web::run(&mut *port, server, WebOptions::default(), &web_stop, |_, _| Ok(())).expect("teleop --web runs")
+    });
+    let length_x = WebOptions::default().arena.0;
+
+    let profile = std::env::temp_dir().join(format!("paperbot-chromium-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&profile);
+    let (mut browser, devtools) = start_chromium(&bin, &profile);
+    let (ws, _) = tungstenite::connect(&devtools).expect("DevTools connect");
+    let mut cdp = Cdp { ws, next: 0, session: None };
+    let target = cdp.call("Target.createTarget", json!({ "url": "about:blank" }))["targetId"].clone();
+    let session = cdp.call("Target.attachToTarget", json!({ "targetId": target, "flatten": true }))["sessionId"].clone();
+    cdp.session = session.as_str().map(String::from);
+    cdp.call("Emulation.setDeviceMetricsOverride", json!({ "width": 1280, "height": 800, "deviceScaleFactor": 1, "mobile": false }));
+    cdp.call("Page.navigate", json!({ "url": format!("http://{addr}/") }));
+
+    // the page loads, drives, and draws the robot where the simulator has it
+    wait_for("the robot drawn", 10_000, || drawn_pose(&mut cdp, length_x));
+    assert_eq!(cdp.eval("document.body.className"), "pilot", "the first page drives");
+    let truths = watch_truth(&format!("ws://{addr}/ws"), Arc::clone(&stop));
+    std::thread::sleep(Duration::from_millis(600));
+    let (drawn, truth) = (drawn_pose(&mut cdp, length_x).unwrap(), latest(&truths));
+    println!("standing: drawn {drawn:?}, simulator {truth:?}");
+    assert!(drawn.distance(&truth) < 3.0, "drawn {drawn:?} vs simulator {truth:?}");
+    // the heading is the estimate's: the lab world's compass disturbance
+    // (a couple of degrees, config::sim) pulls it off the truth a little
+    assert!(drawn.heading_error(&truth).abs() < 3f64.to_radians(), "drawn {drawn:?} vs simulator {truth:?}");
+
+    // a press on "forward" (held) moves the simulated robot
+    let rect = cdp.eval(
+        "(() => { const r = document.getElementById('btn-fwd').getBoundingClientRect(); \
+         return [r.x + r.width / 2, r.y + r.height / 2]; })()",
+    );
+    let (bx, by) = (rect[0].as_f64().unwrap(), rect[1].as_f64().unwrap());
+    cdp.mouse("mouseMoved", bx, by);
+    cdp.mouse("mousePressed", bx, by);
+    std::thread::sleep(Duration::from_millis(1500));
+    let moved = latest(&truths);
+    println!("after 1.5 s of forward: simulator {moved:?}");
+    assert!(moved.x - truth.x > 100.0, "forward moved the robot north: {truth:?} -> {moved:?}");
+    let drawn = drawn_pose(&mut cdp, length_x).unwrap();
+    // while moving at ~0.14 m/s the drawing lags the truth by a row or two
+    assert!(drawn.distance(&moved) < 30.0, "drawn {drawn:?} follows {moved:?}");
+    let shot = cdp.call("Page.captureScreenshot", json!({ "format": "png" }));
+    let png = data_encoding::BASE64.decode(shot["data"].as_str().unwrap().as_bytes()).unwrap();
+    let out = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("target/web-e2e.png");
+    std::fs::write(&out, png).unwrap();
+    println!("screenshot: {}", out.display());
+
+    // closing the tab with the button still held stops the robot in time
+    cdp.session = None;
+    let closed = Instant::now();
+    cdp.call("Target.closeTarget", json!({ "targetId": target }));
+    std::thread::sleep(Duration::from_millis(1500));
+    let t = truths.lock().unwrap().clone();
+    let last = t.last().unwrap().1;
+    let still_from = t.iter().rev().take_while(|(_, p)| p.distance(&last) < 0.05).last().unwrap().0;
+    let took = still_from.saturating_duration_since(closed);
+    println!("closed the tab: the robot stood still {} ms later", took.as_millis());
+    assert!(last.x - moved.x > 0.0, "it kept going until the tab closed");
+    assert!(
+        took < Duration::from_millis(u64::from(config::timing::DEADMAN_MS)),
+        "stopped {} ms after the tab closed",
+        took.as_millis()
+    );
+    assert!(closed.elapsed() - took > Duration::from_millis(800), "and stays still");
+
+    stop.store(true, Ordering::Relaxed);
+    let _ = browser.kill();
+    let _ = browser.wait();
+    let report = tool.join().unwrap();
+    sim.join().unwrap();
+    let _ = std::fs::remove_dir_all(&profile);
+    assert_eq!(report.pages, 2, "the browser's page and the watcher");
+}
