@@ -34,6 +34,7 @@ use tungstenite::handshake::server::{write_response, Request};
 use tungstenite::http::{Response, StatusCode};
 use tungstenite::protocol::frame::coding::CloseCode;
 use tungstenite::protocol::{CloseFrame, WebSocketConfig};
+use tungstenite::error::ProtocolError;
 use tungstenite::{Message, WebSocket};
 
 use super::command::{parse_command, Command};
@@ -125,18 +126,32 @@ impl WebServer {
     }
 }
 
+/// A request head, as far as it came.
+enum Head {
+    /// Complete: its length and the request.
+    Request(usize, Request),
+    /// Not a request we take (tungstenite's parser takes GET only): the
+    /// status to answer, and the bytes that came.
+    Refused(StatusCode, usize),
+    /// Closed, too long or too slow.
+    Nothing,
+}
+
 /// Waits until the request head has arrived (peeking, so tungstenite's
-/// handshake reads it again), returns it and its length.
-fn peek_head(stream: &TcpStream) -> io::Result<Option<(usize, Request)>> {
+/// handshake reads it again).
+fn peek_head(stream: &TcpStream) -> io::Result<Head> {
     let start = Instant::now();
     let mut buf = std::vec![0u8; MAX_HEAD];
     loop {
         let n = stream.peek(&mut buf)?;
         match Request::try_parse(buf.get(..n).unwrap_or(&[])) {
-            Ok(Some(parsed)) => return Ok(Some(parsed)),
+            Ok(Some((len, req))) => return Ok(Head::Request(len, req)),
             Ok(None) if n > 0 && n < MAX_HEAD && start.elapsed() < HEAD_TIMEOUT => {}
-            Ok(None) if n == 0 => return Ok(None), // closed before a request
-            _ => return Ok(None),
+            Ok(None) => return Ok(Head::Nothing),
+            Err(tungstenite::Error::Protocol(ProtocolError::WrongHttpMethod)) => {
+                return Ok(Head::Refused(StatusCode::METHOD_NOT_ALLOWED, n))
+            }
+            Err(_) => return Ok(Head::Refused(StatusCode::BAD_REQUEST, n)),
         }
         std::thread::sleep(Duration::from_millis(2));
     }
@@ -166,8 +181,17 @@ fn connection(mut stream: TcpStream, id: u64, events: &Sender<Event>, stop: &Ato
     stream.set_read_timeout(Some(HEAD_TIMEOUT))?;
     stream.set_write_timeout(Some(WRITE_TIMEOUT))?;
     let _ = stream.set_nodelay(true);
-    let Some((len, req)) = peek_head(&stream)? else {
-        return Ok(());
+    let (len, req) = match peek_head(&stream)? {
+        Head::Request(len, req) => (len, req),
+        Head::Nothing => return Ok(()),
+        Head::Refused(status, n) => {
+            // what came is read (the peer sees our answer, not a reset for unread bytes)
+            let mut head = std::vec![0u8; n];
+            stream.read_exact(&mut head)?;
+            let result = respond(&mut stream, status, "text/plain", b"GET only\n");
+            let _ = stream.shutdown(Shutdown::Write);
+            return result;
+        }
     };
     let path = req.uri().path().to_string();
     if is_upgrade(&req) && path == WS_PATH {
@@ -179,13 +203,9 @@ fn connection(mut stream: TcpStream, id: u64, events: &Sender<Event>, stop: &Ato
     // reset for unread bytes), answered, and the connection closed
     let mut head = std::vec![0u8; len];
     stream.read_exact(&mut head)?;
-    let result = if req.method() != "GET" && req.method() != "HEAD" {
-        respond(&mut stream, StatusCode::METHOD_NOT_ALLOWED, "text/plain", b"GET only\n")
-    } else {
-        match FILES.iter().find(|(p, _, _)| *p == path) {
-            Some((_, ctype, body)) => respond(&mut stream, StatusCode::OK, ctype, body.as_bytes()),
-            None => respond(&mut stream, StatusCode::NOT_FOUND, "text/plain", b"not found\n"),
-        }
+    let result = match FILES.iter().find(|(p, _, _)| *p == path) {
+        Some((_, ctype, body)) => respond(&mut stream, StatusCode::OK, ctype, body.as_bytes()),
+        None => respond(&mut stream, StatusCode::NOT_FOUND, "text/plain", b"not found\n"),
     };
     let _ = stream.shutdown(Shutdown::Write);
     result
