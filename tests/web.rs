@@ -151,6 +151,27 @@ fn the_page_is_served_from_the_tool_alone() {
 }
 
 #[test]
+fn another_sites_page_cannot_open_the_websocket() {
+    use tungstenite::client::IntoClientRequest;
+    let tool = Tool::start();
+    let url = format!("ws://{}/ws", tool.addr);
+    let with_origin = |origin: &str| {
+        let mut req = url.as_str().into_client_request().unwrap();
+        req.headers_mut().insert("Origin", origin.parse().unwrap());
+        tungstenite::connect(req)
+    };
+    match with_origin("http://evil.example") {
+        Err(tungstenite::Error::Http(r)) => assert_eq!(r.status(), 403),
+        other => panic!("another site's page got in: {:?}", other.map(|_| ())),
+    }
+    let (mut own, _) = with_origin(&format!("http://{}", tool.addr)).expect("the page's own origin gets in");
+    let Ok(Message::Text(hello)) = own.read() else { panic!("no hello") };
+    assert!(hello.contains("\"pilot\""), "{hello}");
+    let (report, _) = tool.finish();
+    assert_eq!(report.pages, 1);
+}
+
+#[test]
 fn a_port_in_use_is_a_clear_error() {
     let taken = TcpListener::bind("127.0.0.1:0").unwrap();
     let addr = taken.local_addr().unwrap().to_string();

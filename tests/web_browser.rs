@@ -210,9 +210,13 @@ fn the_page_draws_drives_and_a_closed_tab_stops_the_robot() {
     let (ws, _) = tungstenite::connect(&devtools).expect("DevTools connect");
     let mut cdp = Cdp { ws, next: 0, session: None };
     let target = cdp.call("Target.createTarget", json!({ "url": "about:blank" }))["targetId"].clone();
-    let session = cdp.call("Target.attachToTarget", json!({ "targetId": target, "flatten": true }))["sessionId"].clone();
+    let session =
+        cdp.call("Target.attachToTarget", json!({ "targetId": target, "flatten": true }))["sessionId"].clone();
     cdp.session = session.as_str().map(String::from);
-    cdp.call("Emulation.setDeviceMetricsOverride", json!({ "width": 1280, "height": 800, "deviceScaleFactor": 1, "mobile": false }));
+    cdp.call(
+        "Emulation.setDeviceMetricsOverride",
+        json!({ "width": 1280, "height": 800, "deviceScaleFactor": 1, "mobile": false }),
+    );
     cdp.call("Page.navigate", json!({ "url": format!("http://{addr}/") }));
 
     // the page loads, drives, and draws the robot where the simulator has it

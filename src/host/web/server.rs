@@ -14,7 +14,9 @@
 //!
 //! The connection threads and the tool's loop talk through channels: a
 //! connection reports [`Event`]s (joined with its queue, a valid command,
-//! left); the loop writes the page's messages into that queue. A malformed
+//! left); the loop writes the page's messages into that queue. A WebSocket
+//! asked for by another site's page (its Origin is not this server) is
+//! refused (403), so a web page open in the same browser cannot drive. A malformed
 //! message closes the connection with its reason (close code 1008, or
 //! 1003 for binary data) and reaches nothing else.
 
@@ -29,12 +31,12 @@ use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 use std::vec::Vec;
 
+use tungstenite::error::ProtocolError;
 use tungstenite::handshake::machine::TryParse;
-use tungstenite::handshake::server::{write_response, Request};
+use tungstenite::handshake::server::{write_response, ErrorResponse, Request};
 use tungstenite::http::{Response, StatusCode};
 use tungstenite::protocol::frame::coding::CloseCode;
 use tungstenite::protocol::{CloseFrame, WebSocketConfig};
-use tungstenite::error::ProtocolError;
 use tungstenite::{Message, WebSocket};
 
 use super::command::{parse_command, Command};
@@ -171,6 +173,22 @@ fn respond(stream: &mut TcpStream, status: StatusCode, content_type: &str, body:
     stream.flush()
 }
 
+/// Whether a WebSocket request comes from this server's own page: a
+/// browser names the page's origin, and any web site open in the same
+/// browser could otherwise drive the robot through `ws://127.0.0.1:8080`.
+/// A request without an Origin (a script, a test) is not from a browser's
+/// page and is let in.
+pub fn same_origin(req: &Request) -> bool {
+    let header = |name: &str| req.headers().get(name).and_then(|v| v.to_str().ok());
+    match (header("origin"), header("host")) {
+        (None, _) => true,
+        (Some(origin), Some(host)) => {
+            origin.strip_prefix("http://").or_else(|| origin.strip_prefix("https://")) == Some(host)
+        }
+        (Some(_), None) => false,
+    }
+}
+
 fn is_upgrade(req: &Request) -> bool {
     req.headers().get("upgrade").and_then(|v| v.to_str().ok()).is_some_and(|v| v.eq_ignore_ascii_case("websocket"))
 }
@@ -196,7 +214,16 @@ fn connection(mut stream: TcpStream, id: u64, events: &Sender<Event>, stop: &Ato
     let path = req.uri().path().to_string();
     if is_upgrade(&req) && path == WS_PATH {
         let config = WebSocketConfig::default().max_message_size(Some(64 * 1024)).max_frame_size(Some(64 * 1024));
-        let ws = tungstenite::accept_with_config(stream, Some(config)).map_err(io::Error::other)?;
+        let same_site = |req: &Request, response| {
+            if same_origin(req) {
+                Ok(response)
+            } else {
+                let mut refused = ErrorResponse::new(Some("the page must come from this server\n".into()));
+                *refused.status_mut() = StatusCode::FORBIDDEN;
+                Err(refused)
+            }
+        };
+        let ws = tungstenite::accept_hdr_with_config(stream, same_site, Some(config)).map_err(io::Error::other)?;
         return page(ws, id, events, stop);
     }
     // a plain request: its head is read (the peer sees our answer, not a
