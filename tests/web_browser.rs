@@ -4,6 +4,8 @@
 //! Chromium driven through its DevTools protocol (over tungstenite):
 //! - the page loads, is the pilot, and draws the robot where the simulator
 //!   has it (the drawn SVG transform, read back, within 3 mm and 3 degrees);
+//! - its "locate" button has the robot find its pose, and the page draws
+//!   the fix's uncertainty ellipse;
 //! - a press on the page's "forward" button moves the simulated robot;
 //! - closing the tab while the button is held stops the robot within the
 //!   500 ms deadman (the true pose stops changing);
@@ -182,7 +184,7 @@ fn the_page_draws_drives_and_a_closed_tab_stops_the_robot() {
         return;
     };
     // the simulator on a PTY, as sim_pty --no-noise --truth-hz 50 serves it
-    let start = PoseF64::new(200.0, 250.0, 0.0);
+    let start = PoseF64::new(380.0, 120.0, 0.0);
     let cfg = SimConfig { noise: Noise::OFF, locate_at_power_up: false, start, ..SimConfig::default() };
     let (mut master, slave) = TTYPort::pair().expect("a pseudo-terminal");
     master.set_timeout(Duration::ZERO).unwrap();
@@ -231,6 +233,19 @@ fn the_page_draws_drives_and_a_closed_tab_stops_the_robot() {
     // (a couple of degrees, config::sim) pulls it off the truth a little
     assert!(drawn.heading_error(&truth).abs() < 3f64.to_radians(), "drawn {drawn:?} vs simulator {truth:?}");
 
+    // "locate": the robot turns in place, finds its pose and reports its
+    // sigma, which the page draws as an ellipse
+    let located = Instant::now();
+    cdp.eval("document.getElementById('locate').click()");
+    wait_for("the fix's ellipse", 30_000, || {
+        (cdp.eval("document.querySelectorAll('#sigma ellipse').length") == 1).then_some(())
+    });
+    let text = cdp.eval("document.getElementById('messages').textContent");
+    println!("located in {} ms: {}", located.elapsed().as_millis(), text.as_str().unwrap().replace('\n', " | "));
+    assert!(text.as_str().unwrap().contains("# located "), "{text}");
+    std::thread::sleep(Duration::from_millis(300));
+    let truth = latest(&truths);
+
     // a press on "forward" (held) moves the simulated robot
     let rect = cdp.eval(
         "(() => { const r = document.getElementById('btn-fwd').getBoundingClientRect(); \
@@ -242,7 +257,8 @@ fn the_page_draws_drives_and_a_closed_tab_stops_the_robot() {
     std::thread::sleep(Duration::from_millis(1500));
     let moved = latest(&truths);
     println!("after 1.5 s of forward: simulator {moved:?}");
-    assert!(moved.x - truth.x > 100.0, "forward moved the robot north: {truth:?} -> {moved:?}");
+    let ahead = (moved.x - truth.x) * truth.theta.cos() + (moved.y - truth.y) * truth.theta.sin();
+    assert!(ahead > 100.0, "forward moved the robot ahead: {truth:?} -> {moved:?}");
     let drawn = drawn_pose(&mut cdp, length_x).unwrap();
     // while moving at ~0.14 m/s the drawing lags the truth by a row or two
     assert!(drawn.distance(&moved) < 30.0, "drawn {drawn:?} follows {moved:?}");
@@ -262,7 +278,7 @@ fn the_page_draws_drives_and_a_closed_tab_stops_the_robot() {
     let still_from = t.iter().rev().take_while(|(_, p)| p.distance(&last) < 0.05).last().unwrap().0;
     let took = still_from.saturating_duration_since(closed);
     println!("closed the tab: the robot stood still {} ms later", took.as_millis());
-    assert!(last.x - moved.x > 0.0, "it kept going until the tab closed");
+    assert!(last.distance(&moved) > 0.0, "it kept going until the tab closed");
     assert!(
         took < Duration::from_millis(u64::from(config::timing::DEADMAN_MS)),
         "stopped {} ms after the tab closed",

@@ -20,6 +20,7 @@
 //! message closes the connection with its reason (close code 1008, or
 //! 1003 for binary data) and reaches nothing else.
 
+use std::boxed::Box;
 use std::format;
 use std::io::{self, ErrorKind, Read, Write};
 use std::net::{Shutdown, SocketAddr, TcpListener, TcpStream};
@@ -33,7 +34,7 @@ use std::vec::Vec;
 
 use tungstenite::error::ProtocolError;
 use tungstenite::handshake::machine::TryParse;
-use tungstenite::handshake::server::{write_response, ErrorResponse, Request};
+use tungstenite::handshake::server::{write_response, ErrorResponse, Request, Response as HandshakeResponse};
 use tungstenite::http::{Response, StatusCode};
 use tungstenite::protocol::frame::coding::CloseCode;
 use tungstenite::protocol::{CloseFrame, WebSocketConfig};
@@ -131,7 +132,7 @@ impl WebServer {
 /// A request head, as far as it came.
 enum Head {
     /// Complete: its length and the request.
-    Request(usize, Request),
+    Request(usize, Box<Request>),
     /// Not a request we take (tungstenite's parser takes GET only): the
     /// status to answer, and the bytes that came.
     Refused(StatusCode, usize),
@@ -147,7 +148,7 @@ fn peek_head(stream: &TcpStream) -> io::Result<Head> {
     loop {
         let n = stream.peek(&mut buf)?;
         match Request::try_parse(buf.get(..n).unwrap_or(&[])) {
-            Ok(Some((len, req))) => return Ok(Head::Request(len, req)),
+            Ok(Some((len, req))) => return Ok(Head::Request(len, Box::new(req))),
             Ok(None) if n > 0 && n < MAX_HEAD && start.elapsed() < HEAD_TIMEOUT => {}
             Ok(None) => return Ok(Head::Nothing),
             Err(tungstenite::Error::Protocol(ProtocolError::WrongHttpMethod)) => {
@@ -189,6 +190,18 @@ pub fn same_origin(req: &Request) -> bool {
     }
 }
 
+/// The handshake's check: [`same_origin`], or 403.
+#[allow(clippy::result_large_err)] // tungstenite's callback signature
+fn same_site(req: &Request, response: HandshakeResponse) -> Result<HandshakeResponse, ErrorResponse> {
+    if same_origin(req) {
+        Ok(response)
+    } else {
+        let mut refused = ErrorResponse::new(Some("the page must come from this server\n".into()));
+        *refused.status_mut() = StatusCode::FORBIDDEN;
+        Err(refused)
+    }
+}
+
 fn is_upgrade(req: &Request) -> bool {
     req.headers().get("upgrade").and_then(|v| v.to_str().ok()).is_some_and(|v| v.eq_ignore_ascii_case("websocket"))
 }
@@ -214,15 +227,6 @@ fn connection(mut stream: TcpStream, id: u64, events: &Sender<Event>, stop: &Ato
     let path = req.uri().path().to_string();
     if is_upgrade(&req) && path == WS_PATH {
         let config = WebSocketConfig::default().max_message_size(Some(64 * 1024)).max_frame_size(Some(64 * 1024));
-        let same_site = |req: &Request, response| {
-            if same_origin(req) {
-                Ok(response)
-            } else {
-                let mut refused = ErrorResponse::new(Some("the page must come from this server\n".into()));
-                *refused.status_mut() = StatusCode::FORBIDDEN;
-                Err(refused)
-            }
-        };
         let ws = tungstenite::accept_hdr_with_config(stream, same_site, Some(config)).map_err(io::Error::other)?;
         return page(ws, id, events, stop);
     }

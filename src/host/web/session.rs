@@ -8,7 +8,7 @@
 //!   until a page takes over (a watcher never starts driving by itself).
 //! - Any page may stop the robot; only the pilot drives it.
 //! - A held motion lasts [`WEB_HOLD_MS`] after the pilot's last `hold`
-//!   (the page repeats it every [`REFRESH_MS`](config::teleop::REFRESH_MS)),
+//!   (the page repeats it every [`REFRESH_MS`](crate::config::teleop::REFRESH_MS)),
 //!   then `stop` is sent: a closed tab, a sleeping phone or a dropped
 //!   network stops the robot well within its deadman. While it lasts, the
 //!   [`Driver`] sends it again every refresh period, as in the terminal UI.
