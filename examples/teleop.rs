@@ -373,7 +373,7 @@ fn run() -> Result<(), String> {
 
     if let Some(server) = web {
         let arena = args.arena.unwrap_or(WebOptions::default().arena);
-        run_web(&mut *port, server, WebOptions { rate_hz: rate, arena }, &mut recorder, &mut raw)
+        run_web(&mut *port, server, WebOptions { rate_hz: Some(rate), arena }, &mut recorder, &mut raw)
             .map_err(|e| format!("{port_name}: {e}"))?;
     } else if missions {
         return run_missions(&args, steps, &mut *port, &port_name, recorder.as_mut());

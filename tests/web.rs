@@ -66,7 +66,7 @@ impl Tool {
         let sent = Arc::clone(&port.sent);
         let stop = Arc::new(AtomicBool::new(false));
         let s = Arc::clone(&stop);
-        let opts = WebOptions { rate_hz: 0, ..WebOptions::default() };
+        let opts = WebOptions { rate_hz: None, ..WebOptions::default() };
         let thread = std::thread::spawn(move || {
             let mut port = port;
             web::run(&mut port, server, opts, &s, |_, _| Ok(())).unwrap()

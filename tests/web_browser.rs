@@ -9,6 +9,9 @@
 //! - a press on the page's "forward" button moves the simulated robot;
 //! - closing the tab while the button is held stops the robot within the
 //!   500 ms deadman (the true pose stops changing);
+//! - in a second tab (it drives: nobody did), a held arrow key turns the
+//!   robot and letting go stops it, a finger held on "backward" backs it,
+//!   and killing the browser with the finger down stops it in time too;
 //! - a screenshot is saved (target/web-e2e.png; docs/web.png is one).
 //!
 //! Needs `chromium` (apt-get install chromium); without it the test says
@@ -65,6 +68,40 @@ impl Cdp {
         let r = self.call("Runtime.evaluate", json!({ "expression": expr, "returnByValue": true }));
         assert!(r.get("exceptionDetails").is_none(), "{expr}: {}", r["exceptionDetails"]);
         r["result"]["value"].clone()
+    }
+
+    /// Opens `url` in a new tab and attaches to it; returns the tab's id.
+    fn open(&mut self, url: &str) -> Value {
+        self.session = None;
+        let target = self.call("Target.createTarget", json!({ "url": "about:blank" }))["targetId"].clone();
+        let session =
+            self.call("Target.attachToTarget", json!({ "targetId": target, "flatten": true }))["sessionId"].clone();
+        self.session = session.as_str().map(String::from);
+        self.call(
+            "Emulation.setDeviceMetricsOverride",
+            json!({ "width": 1280, "height": 800, "deviceScaleFactor": 1, "mobile": false }),
+        );
+        // a headless tab has no window focus: keys need it emulated
+        self.call("Emulation.setFocusEmulationEnabled", json!({ "enabled": true }));
+        self.call("Emulation.setTouchEmulationEnabled", json!({ "enabled": true, "maxTouchPoints": 1 }));
+        self.call("Page.navigate", json!({ "url": url }));
+        target
+    }
+
+    /// The centre of the element with id `id`, CSS px.
+    fn centre(&mut self, id: &str) -> (f64, f64) {
+        let r = self.eval(&format!(
+            "(() => {{ const r = document.getElementById('{id}').getBoundingClientRect(); \
+             return [r.x + r.width / 2, r.y + r.height / 2]; }})()"
+        ));
+        (r[0].as_f64().unwrap(), r[1].as_f64().unwrap())
+    }
+
+    fn key(&mut self, kind: &str, key: &str, code: u32) {
+        self.call(
+            "Input.dispatchKeyEvent",
+            json!({ "type": kind, "key": key, "code": key, "windowsVirtualKeyCode": code }),
+        );
     }
 
     fn mouse(&mut self, kind: &str, x: f64, y: f64) {
@@ -247,11 +284,7 @@ fn the_page_draws_drives_and_a_closed_tab_stops_the_robot() {
     let truth = latest(&truths);
 
     // a press on "forward" (held) moves the simulated robot
-    let rect = cdp.eval(
-        "(() => { const r = document.getElementById('btn-fwd').getBoundingClientRect(); \
-         return [r.x + r.width / 2, r.y + r.height / 2]; })()",
-    );
-    let (bx, by) = (rect[0].as_f64().unwrap(), rect[1].as_f64().unwrap());
+    let (bx, by) = cdp.centre("btn-fwd");
     cdp.mouse("mouseMoved", bx, by);
     cdp.mouse("mousePressed", bx, by);
     std::thread::sleep(Duration::from_millis(1500));
@@ -273,10 +306,7 @@ fn the_page_draws_drives_and_a_closed_tab_stops_the_robot() {
     let closed = Instant::now();
     cdp.call("Target.closeTarget", json!({ "targetId": target }));
     std::thread::sleep(Duration::from_millis(1500));
-    let t = truths.lock().unwrap().clone();
-    let last = t.last().unwrap().1;
-    let still_from = t.iter().rev().take_while(|(_, p)| p.distance(&last) < 0.05).last().unwrap().0;
-    let took = still_from.saturating_duration_since(closed);
+    let (took, last) = still_since(&truths, closed);
     println!("closed the tab: the robot stood still {} ms later", took.as_millis());
     assert!(last.distance(&moved) > 0.0, "it kept going until the tab closed");
     assert!(
@@ -286,11 +316,49 @@ fn the_page_draws_drives_and_a_closed_tab_stops_the_robot() {
     );
     assert!(closed.elapsed() - took > Duration::from_millis(800), "and stays still");
 
-    stop.store(true, Ordering::Relaxed);
+    // a new tab: nobody drives (the watcher does not start by itself), so it drives
+    let _second = cdp.open(&format!("http://{addr}/"));
+    wait_for("the second tab's robot", 10_000, || drawn_pose(&mut cdp, length_x));
+    assert_eq!(cdp.eval("document.body.className"), "pilot");
+    // keys: the left arrow held turns the robot counter-clockwise; let go, it stops
+    let before = latest(&truths);
+    cdp.key("keyDown", "ArrowLeft", 37);
+    std::thread::sleep(Duration::from_millis(400));
+    cdp.key("keyUp", "ArrowLeft", 37);
+    std::thread::sleep(Duration::from_millis(300));
+    let turned = latest(&truths);
+    println!("left arrow for 0.4 s: heading {:.1} -> {:.1} deg", before.theta.to_degrees(), turned.theta.to_degrees());
+    assert!(turned.heading_error(&before) < -20f64.to_radians(), "turned counter-clockwise");
+    std::thread::sleep(Duration::from_millis(200));
+    assert!(latest(&truths).distance(&turned) < 0.05, "and stopped when the key came up");
+    // touch: a finger held on "backward" drives it backwards
+    let (bx, by) = cdp.centre("btn-back");
+    cdp.call("Input.dispatchTouchEvent", json!({ "type": "touchStart", "touchPoints": [{ "x": bx, "y": by }] }));
+    std::thread::sleep(Duration::from_millis(800));
+    let backed = latest(&truths);
+    let behind = (turned.x - backed.x) * turned.theta.cos() + (turned.y - backed.y) * turned.theta.sin();
+    println!("touch on backward for 0.8 s: {behind:.0} mm back");
+    assert!(behind > 50.0, "{turned:?} -> {backed:?}");
+    // a dead browser (killed while the finger is down) stops the robot too
+    let killed = Instant::now();
     let _ = browser.kill();
     let _ = browser.wait();
+    std::thread::sleep(Duration::from_millis(1500));
+    let (took, _) = still_since(&truths, killed);
+    println!("killed the browser: the robot stood still {} ms later", took.as_millis());
+    assert!(took < Duration::from_millis(u64::from(config::timing::DEADMAN_MS)), "{} ms", took.as_millis());
+
+    stop.store(true, Ordering::Relaxed);
     let report = tool.join().unwrap();
     sim.join().unwrap();
     let _ = std::fs::remove_dir_all(&profile);
-    assert_eq!(report.pages, 2, "the browser's page and the watcher");
+    assert_eq!(report.pages, 3, "two tabs and the watcher");
+}
+
+/// How long after `from` the true pose stopped changing for good, and the last pose.
+fn still_since(truths: &Truths, from: Instant) -> (Duration, PoseF64) {
+    let t = truths.lock().unwrap().clone();
+    let last = t.last().unwrap().1;
+    let still_from = t.iter().rev().take_while(|(_, p)| p.distance(&last) < 0.05).last().unwrap().0;
+    (still_from.saturating_duration_since(from), last)
 }

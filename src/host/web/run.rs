@@ -17,8 +17,8 @@ use crate::host::teleop::{link, LineReader};
 /// How a run goes.
 #[derive(Clone, Copy, PartialEq, Debug)]
 pub struct WebOptions {
-    /// Telemetry rate to ask for, Hz (0: leave it as it is).
-    pub rate_hz: u16,
+    /// Telemetry rate to ask for, Hz (0 switches it off; `None` leaves it as it is).
+    pub rate_hz: Option<u16>,
     /// The box, mm (x north, y east).
     pub arena: (f64, f64),
 }
@@ -26,7 +26,7 @@ pub struct WebOptions {
 impl Default for WebOptions {
     fn default() -> Self {
         WebOptions {
-            rate_hz: config::timing::TELEMETRY_HZ as u16,
+            rate_hz: Some(config::timing::TELEMETRY_HZ as u16),
             arena: (config::arena::LENGTH_X.to_mm_f64(), config::arena::WIDTH_Y.to_mm_f64()),
         }
     }
@@ -68,8 +68,8 @@ where
     let mut session = Session::default();
     let mut reader = LineReader::new();
     let mut report = WebReport::default();
-    if opts.rate_hz > 0 {
-        link::start_telemetry(port, opts.rate_hz)?;
+    if let Some(hz) = opts.rate_hz {
+        link::start_telemetry(port, hz)?;
     }
     let mut next_state = 0u64;
     let result = (|| -> io::Result<()> {

@@ -25,7 +25,7 @@ use std::format;
 use std::io::{self, ErrorKind, Read, Write};
 use std::net::{Shutdown, SocketAddr, TcpListener, TcpStream};
 use std::string::{String, ToString};
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{self, Receiver, Sender, SyncSender, TryRecvError};
 use std::sync::Arc;
 use std::thread::JoinHandle;
@@ -110,18 +110,19 @@ impl WebServer {
     /// thread, reporting to `events`.
     pub fn start(self, events: Sender<Event>, stop: Arc<AtomicBool>) -> io::Result<JoinHandle<()>> {
         self.listener.set_nonblocking(true)?;
-        let ids = AtomicU64::new(1);
         Ok(std::thread::spawn(move || {
+            let mut next_id = 0u64;
             while !stop.load(Ordering::Relaxed) {
                 match self.listener.accept() {
                     Ok((stream, _)) => {
-                        let id = ids.fetch_add(1, Ordering::Relaxed);
+                        next_id += 1;
+                        let id = next_id;
                         let (events, stop) = (events.clone(), Arc::clone(&stop));
                         std::thread::spawn(move || {
                             let _ = connection(stream, id, &events, &stop);
                         });
                     }
-                    Err(e) if e.kind() == ErrorKind::WouldBlock => std::thread::sleep(Duration::from_millis(10)),
+                    // nothing to accept (or a refused one): look again shortly
                     Err(_) => std::thread::sleep(Duration::from_millis(10)),
                 }
             }
@@ -329,10 +330,4 @@ fn serve_page(
             ws.flush().map_err(io::Error::other)?;
         }
     }
-}
-
-/// Every file the page needs, with its path (tests check the page loads
-/// nothing else).
-pub fn file_paths() -> Vec<&'static str> {
-    FILES.iter().map(|(p, _, _)| *p).collect()
 }
