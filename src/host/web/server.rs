@@ -30,7 +30,6 @@ use std::sync::mpsc::{self, Receiver, Sender, SyncSender, TryRecvError};
 use std::sync::Arc;
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
-use std::vec::Vec;
 
 use tungstenite::error::ProtocolError;
 use tungstenite::handshake::machine::TryParse;
