@@ -236,7 +236,9 @@ fn the_page_draws_drives_and_a_closed_tab_stops_the_robot() {
     // teleop --web on it
     let server = WebServer::bind("127.0.0.1:0").unwrap();
     let addr = server.local_addr();
-    let web_stop = Arc::clone(&stop);
+    // the tool stops first (its last word to the robot is `stop`), then the simulator
+    let tool_stop = Arc::new(AtomicBool::new(false));
+    let web_stop = Arc::clone(&tool_stop);
     let tool = std::thread::spawn(move || {
         let mut port = serialport::new(&path, config::serial::BAUD).timeout(Duration::from_millis(5)).open().unwrap();
         web::run(&mut *port, server, WebOptions::default(), &web_stop, |_, _| Ok(())).expect("teleop --web runs")
@@ -248,15 +250,7 @@ fn the_page_draws_drives_and_a_closed_tab_stops_the_robot() {
     let (mut browser, devtools) = start_chromium(&bin, &profile);
     let (ws, _) = tungstenite::connect(&devtools).expect("DevTools connect");
     let mut cdp = Cdp { ws, next: 0, session: None };
-    let target = cdp.call("Target.createTarget", json!({ "url": "about:blank" }))["targetId"].clone();
-    let session =
-        cdp.call("Target.attachToTarget", json!({ "targetId": target, "flatten": true }))["sessionId"].clone();
-    cdp.session = session.as_str().map(String::from);
-    cdp.call(
-        "Emulation.setDeviceMetricsOverride",
-        json!({ "width": 1280, "height": 800, "deviceScaleFactor": 1, "mobile": false }),
-    );
-    cdp.call("Page.navigate", json!({ "url": format!("http://{addr}/") }));
+    let target = cdp.open(&format!("http://{addr}/"));
 
     // the page loads, drives, and draws the robot where the simulator has it
     wait_for("the robot drawn", 10_000, || drawn_pose(&mut cdp, length_x));
@@ -348,8 +342,9 @@ fn the_page_draws_drives_and_a_closed_tab_stops_the_robot() {
     println!("killed the browser: the robot stood still {} ms later", took.as_millis());
     assert!(took < Duration::from_millis(u64::from(config::timing::DEADMAN_MS)), "{} ms", took.as_millis());
 
-    stop.store(true, Ordering::Relaxed);
+    tool_stop.store(true, Ordering::Relaxed);
     let report = tool.join().unwrap();
+    stop.store(true, Ordering::Relaxed);
     sim.join().unwrap();
     let _ = std::fs::remove_dir_all(&profile);
     assert_eq!(report.pages, 3, "two tabs and the watcher");
