@@ -47,8 +47,9 @@ fn parse_args() -> Result<Args, String> {
             }
             "--truth-hz" => {
                 a.truth_hz = value("--truth-hz")?.parse().map_err(|_| "--truth-hz wants an integer")?;
-                if a.truth_hz > 100 {
-                    return Err("--truth-hz wants 0..100".into());
+                let most = u32::from(paperbot::config::serial::MAX_TELEMETRY_HZ);
+                if a.truth_hz > most {
+                    return Err(format!("--truth-hz wants 0..{most} (telemetry's fastest)"));
                 }
             }
             "--duration" => a.duration_s = Some(args::number("--duration", &value("--duration")?)?),

@@ -80,9 +80,10 @@ impl Server {
     }
 
     /// Also sends the true pose `hz` times a second of simulated time (0:
-    /// never), as [`truth_line`]s among the robot's lines.
+    /// never; at most once a loop period), as [`truth_line`]s among the
+    /// robot's lines.
     pub fn with_truth(mut self, hz: u32) -> Server {
-        self.truth = (hz > 0).then(|| (1_000_000 / u64::from(hz.min(1000)), 0));
+        self.truth = (hz > 0).then(|| (1_000_000 / u64::from(hz), 0));
         self
     }
 

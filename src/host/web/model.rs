@@ -98,6 +98,15 @@ fn mm(dmm: i32) -> f64 {
     f64::from(dmm) / 10.0
 }
 
+/// A row's estimated pose.
+fn row_pose(r: &TelemetryRow) -> PoseF64 {
+    PoseF64::new(mm(r.x_dmm), mm(r.y_dmm), (f64::from(r.heading_mdeg) / 1000.0).to_radians())
+}
+
+/// How far ahead of the nose the body's outline points, mm (a drawing's
+/// mark of the heading, not a part of the robot).
+const HEADING_MARK_MM: f64 = 15.0;
+
 fn pose_json(p: &PoseF64) -> Value {
     json!({ "x": p.x, "y": p.y, "heading": p.theta.to_degrees().rem_euclid(360.0) })
 }
@@ -135,7 +144,7 @@ impl Live {
         // the body in its own frame (forward, right) mm from the reference
         // point (the nose): a point ahead shows the heading, the sides run
         // back past the wheels on the axle to the skid
-        let body = [[15.0, 0.0], [0.0, half], [-d - skid, half], [-d - skid, -half], [0.0, -half]];
+        let body = [[HEADING_MARK_MM, 0.0], [0.0, half], [-d - skid, half], [-d - skid, -half], [0.0, -half]];
         let wheels = [[-d, -half], [-d, half]];
         let lidars: Vec<Value> = LIDARS
             .iter()
@@ -192,8 +201,7 @@ impl Live {
         }
     }
 
-    fn estimate(&self, r: &TelemetryRow) -> Value {
-        let pose = PoseF64::new(mm(r.x_dmm), mm(r.y_dmm), (f64::from(r.heading_mdeg) / 1000.0).to_radians());
+    fn estimate(&self, pose: &PoseF64) -> Value {
         let (state, sigma) = match self.fix {
             Fix::Unknown => ("unknown", Value::Null),
             Fix::Lost => ("lost", Value::Null),
@@ -203,7 +211,7 @@ impl Live {
                 json!({ "x": sigma_x, "y": sigma_y, "at": pose_json(&at), "t_ms": t_ms }),
             ),
         };
-        let mut e = pose_json(&pose);
+        let mut e = pose_json(pose);
         if let Some(o) = e.as_object_mut() {
             o.insert("state".into(), state.into());
             o.insert("sigma".into(), sigma);
@@ -213,7 +221,7 @@ impl Live {
     }
 
     fn row(&self, r: &TelemetryRow) -> Value {
-        let pose = PoseF64::new(mm(r.x_dmm), mm(r.y_dmm), (f64::from(r.heading_mdeg) / 1000.0).to_radians());
+        let pose = row_pose(r);
         let mut rays = Vec::new();
         for ((name, color, mount), dmm) in LIDARS.iter().zip([r.front_dmm, r.right_dmm]) {
             let Some(d) = dmm else { continue };
@@ -228,7 +236,7 @@ impl Live {
         json!({
             "type": "row",
             "t_ms": r.t_ms,
-            "estimate": self.estimate(r),
+            "estimate": self.estimate(&pose),
             "motion": telemetry::motion_word(r.motion),
             "v": f64::from(r.v_mm_s) / 1000.0,
             "w": f64::from(r.w_mrad_s) / 1000.0,
