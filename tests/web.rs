@@ -1,7 +1,7 @@
 //! `teleop --web`'s server over real sockets, with a fake robot port that
 //! records what the tool sends: the files (and only they) are served, a
 //! port in use is a clear error, a second page watches and may take over
-//! (the first is told), malformed messages close that page's connection
+//! (the first is told), any page stops the robot, malformed messages close that page's connection
 //! with the reason and change nothing, and a held motion runs out when
 //! the pilot stops repeating it (a sleeping phone) or leaves (a closed tab).
 
@@ -209,6 +209,11 @@ fn a_second_page_watches_until_it_takes_over() {
     assert_eq!(tool.sent_since(t1).first().map(String::as_str), Some("stop"));
     let (msgs, _) = messages(&mut b, 250);
     assert_eq!(of_type(&msgs, "state").last().unwrap()["role"], "pilot");
+    // any page may stop the robot, watchers too (even with nothing held: a `locate` ends)
+    let t2 = Instant::now();
+    send(&mut a, r#"{"cmd":"stop"}"#);
+    messages(&mut a, 60);
+    assert_eq!(tool.sent_since(t2), ["stop"]);
     let (report, _) = tool.finish();
     assert_eq!(report.pages, 2);
 }

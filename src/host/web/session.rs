@@ -6,7 +6,8 @@
 //!   (`take`): the robot stops, and the page that drove is told it now
 //!   watches. When the pilot leaves, the robot stops and nobody drives
 //!   until a page takes over (a watcher never starts driving by itself).
-//! - Any page may stop the robot; only the pilot drives it.
+//! - Any page may stop the robot (`stop` goes out even when nothing is
+//!   held: it also ends a `locate`); only the pilot drives it.
 //! - A held motion lasts [`WEB_HOLD_MS`] after the pilot's last `hold`
 //!   (the page repeats it every [`REFRESH_MS`](crate::config::teleop::REFRESH_MS)),
 //!   then `stop` is sent: a closed tab, a sleeping phone or a dropped
@@ -129,8 +130,10 @@ impl Session {
         let pilot = self.pilot() == Some(id);
         match cmd {
             Command::Stop => {
-                self.driver.set(MotionKind::Stop);
-                return Vec::new();
+                // sent even when nothing is held: it also ends a `locate`'s turns
+                let out = self.stop_now(now_ms);
+                self.send_state(live, now_ms);
+                return out;
             }
             Command::Take if !pilot => {
                 if let Some(old) = self.pilot() {
@@ -160,8 +163,7 @@ impl Session {
             }
             Command::Locate => {
                 // a held motion stops first (its refreshes would cut the turns short)
-                self.driver.set(MotionKind::Stop);
-                let mut out: Vec<String> = self.driver.poll(now_ms).into_iter().collect();
+                let mut out = self.stop_now(now_ms);
                 out.push(String::from(keys::LOCATE_COMMAND));
                 self.send_state(live, now_ms);
                 return out;
@@ -169,6 +171,13 @@ impl Session {
         }
         self.send_state(live, now_ms);
         Vec::new()
+    }
+
+    /// Lets go of any held motion and says `stop` (once).
+    fn stop_now(&mut self, now_ms: u64) -> Vec<String> {
+        self.driver.set(MotionKind::Stop);
+        let sent = self.driver.poll(now_ms);
+        std::vec![sent.unwrap_or_else(|| String::from("stop"))]
     }
 
     /// The line to send the robot at `now_ms`, if one is due: a held motion
