@@ -71,7 +71,8 @@ function setRole(role) {
   document.body.className = role;
   $("role").textContent = role === "pilot" ? "you drive" : "watching (read-only)";
   $("take").hidden = role === "pilot";
-  if (role !== "pilot") release();
+  if (role !== "pilot") release(false); // the robot is no longer ours to stop
+
 }
 
 function onRow(r) {
@@ -178,14 +179,13 @@ function hold(motion) {
   state.timer = setInterval(() => send({ cmd: "hold", motion }), state.hello ? state.hello.refresh_ms : 125);
 }
 
-function release() {
+// lets go of a held motion (and says stop, unless told not to)
+function release(sayStop = true) {
   clearInterval(state.timer);
   state.timer = null;
   document.querySelectorAll("#pad button").forEach((b) => b.classList.remove("held"));
-  if (state.held) {
-    state.held = null;
-    send({ cmd: "stop" });
-  }
+  if (state.held && sayStop) send({ cmd: "stop" });
+  state.held = null;
 }
 
 function connect() {
@@ -215,23 +215,24 @@ function connect() {
 
 for (const b of document.querySelectorAll("#pad button[data-motion]")) {
   b.addEventListener("pointerdown", (e) => { e.preventDefault(); b.setPointerCapture?.(e.pointerId); hold(b.dataset.motion); });
-  for (const ev of ["pointerup", "pointercancel", "lostpointercapture"]) b.addEventListener(ev, release);
+  for (const ev of ["pointerup", "pointercancel", "lostpointercapture"]) b.addEventListener(ev, () => release());
   b.addEventListener("contextmenu", (e) => e.preventDefault());
 }
-$("btn-stop").addEventListener("pointerdown", () => { release(); send({ cmd: "stop" }); });
+// (stop and locate: the server lets go of a held motion itself)
+$("btn-stop").addEventListener("pointerdown", () => { release(false); send({ cmd: "stop" }); });
 $("faster").addEventListener("click", () => send({ cmd: "faster" }));
 $("slower").addEventListener("click", () => send({ cmd: "slower" }));
-$("locate").addEventListener("click", () => { release(); send({ cmd: "locate" }); });
+$("locate").addEventListener("click", () => { release(false); send({ cmd: "locate" }); });
 $("take").addEventListener("click", () => { send({ cmd: "take" }); $("notice").hidden = true; });
 
 const KEYS = { ArrowUp: "fwd", w: "fwd", ArrowDown: "back", s: "back", ArrowLeft: "ccw", a: "ccw", ArrowRight: "cw", d: "cw" };
 document.addEventListener("keydown", (e) => {
   const k = e.key.length === 1 ? e.key.toLowerCase() : e.key;
   if (KEYS[k]) { e.preventDefault(); if (!e.repeat) hold(KEYS[k]); }
-  else if (k === " " || k === "x") { e.preventDefault(); release(); send({ cmd: "stop" }); }
+  else if (k === " " || k === "x") { e.preventDefault(); release(false); send({ cmd: "stop" }); }
   else if (k === "+" || k === "=" || k === "e") send({ cmd: "faster" });
   else if (k === "-" || k === "_" || k === "z") send({ cmd: "slower" });
-  else if (k === "r") { release(); send({ cmd: "locate" }); }
+  else if (k === "r") { release(false); send({ cmd: "locate" }); }
 });
 document.addEventListener("keyup", (e) => {
   const k = e.key.length === 1 ? e.key.toLowerCase() : e.key;
@@ -239,8 +240,8 @@ document.addEventListener("keyup", (e) => {
 });
 // a hidden tab or a lost focus lets go of everything
 document.addEventListener("visibilitychange", () => { if (document.hidden) release(); });
-window.addEventListener("blur", release);
-window.addEventListener("pagehide", release);
+window.addEventListener("blur", () => release());
+window.addEventListener("pagehide", () => release());
 
 // a bug in this page shows itself instead of freezing the map silently
 window.addEventListener("error", (e) => notice(`page error: ${e.message} (${e.lineno})`));
