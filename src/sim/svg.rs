@@ -32,14 +32,12 @@ pub struct Ray<'a> {
 }
 
 impl<'a> Ray<'a> {
-    /// A reading of the lidar at `mount` on the body at `pose`: `distance_mm`
-    /// is the lidar model's distance from the reference point along the
-    /// beam, so the beam ends that far from the reference point's foot on
-    /// the beam, i.e. the distance less the mount's setback from the lidar.
+    /// A reading of the lidar at `mount` on the body at `pose`, from the
+    /// lidar to where the beam ended ([`LidarMount::beam_f64`]: `distance_mm`
+    /// is the lidar model's distance from the reference point along the beam).
     pub fn of_reading(pose: &PoseF64, mount: &LidarMount, distance_mm: f64, color: &'a str) -> Ray<'a> {
-        let (x, y, dir) = pose.lidar_ray(mount);
-        let range = distance_mm - PoseF64::along_beam_mm(mount);
-        Ray { from: (x, y), to: (x + range * dir.cos(), y + range * dir.sin()), color }
+        let (from, to) = mount.beam_f64(pose.x, pose.y, pose.theta, distance_mm);
+        Ray { from, to, color }
     }
 }
 

@@ -10,9 +10,6 @@
 //!   runs out unless the page repeats it (so a closed tab stops the robot);
 //! - [`server`]: the port: the page's files and its WebSocket (tungstenite);
 //! - [`run()`]: the loop that ties them to the serial link.
-//!
-//! The model draws with the simulator's f64 body geometry
-//! ([`crate::sim::body`], [`crate::sim::svg::Ray`]), so `web` implies `sim`.
 
 pub mod command;
 pub mod model;
@@ -21,7 +18,7 @@ pub mod server;
 pub mod session;
 
 pub use command::{parse_command, Command};
-pub use model::{parse_truth, Live, Role};
+pub use model::{parse_truth, Live, MapPose, Role};
 pub use run::{run, WebOptions, WebReport};
 pub use server::{Event, WebServer};
 pub use session::Session;

@@ -10,7 +10,7 @@
 //!   several), motion, servo commands, the fresh sensor readings, the fault
 //!   counters, and the `rays`: each fresh lidar reading from the lidar to
 //!   where its beam ended, computed as `replay` draws them
-//!   ([`crate::sim::svg::Ray::of_reading`]);
+//!   ([`LidarMount::beam_f64`], as `sim::svg::Ray::of_reading`);
 //! - `message`: a `#` line for the messages panel (refresh acknowledgements
 //!   are left out, as the terminal UI does);
 //! - `truth`: the simulator's true pose, from `sim_pty --truth-hz`'s
@@ -33,8 +33,22 @@ use super::super::teleop::{Dashboard, Driver};
 use crate::config;
 use crate::control::protocol::{telemetry, LineKind, TelemetryRow};
 use crate::model::lidar::LidarMount;
-use crate::sim::body::PoseF64;
-use crate::sim::svg::Ray;
+
+/// A pose as the page draws it: mm (x north, y east) and heading in
+/// degrees clockwise from north.
+#[derive(Clone, Copy, PartialEq, Debug, Default)]
+pub struct MapPose {
+    pub x: f64,
+    pub y: f64,
+    pub heading_deg: f64,
+}
+
+impl MapPose {
+    /// Distance between the two positions, mm.
+    pub fn distance(&self, other: &MapPose) -> f64 {
+        (self.x - other.x).hypot(self.y - other.y)
+    }
+}
 
 /// Who a page is: the one that drives, or one that watches.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
@@ -60,7 +74,7 @@ pub enum Fix {
     Unknown,
     /// `# located ...`: the fix's pose and one-sigma x, y (mm); `ambiguous`
     /// when more than one place fits.
-    Located { pose: PoseF64, sigma_x: f64, sigma_y: f64, ambiguous: bool, t_ms: Option<u32> },
+    Located { pose: MapPose, sigma_x: f64, sigma_y: f64, ambiguous: bool, t_ms: Option<u32> },
     /// `# locate failed ...`: the robot says its pose is unknown.
     Lost,
     /// `# ok pose ...`: set by the user.
@@ -76,7 +90,7 @@ pub fn parse_located(line: &str) -> Option<Fix> {
         return None;
     }
     Some(Fix::Located {
-        pose: PoseF64::new(num(0)?, num(1)?, num(2)?.to_radians()),
+        pose: MapPose { x: num(0)?, y: num(1)?, heading_deg: num(2)? },
         sigma_x: num(4)?,
         sigma_y: num(5)?,
         ambiguous: rest.contains("ambiguous"),
@@ -85,13 +99,13 @@ pub fn parse_located(line: &str) -> Option<Fix> {
 }
 
 /// Parses `# truth t_ms=T x_mm=X y_mm=Y heading_deg=H` (`sim_pty --truth-hz`,
-/// [`crate::sim::serve::truth_line`]).
-pub fn parse_truth(line: &str) -> Option<(u32, PoseF64)> {
+/// `sim::serve::truth_line`).
+pub fn parse_truth(line: &str) -> Option<(u32, MapPose)> {
     let rest = line.strip_prefix("# truth ")?;
     let field = |key: &str| rest.split(' ').find_map(|kv| kv.strip_prefix(key)?.strip_prefix('=')?.parse::<f64>().ok());
     let (t, x, y, h) = (field("t_ms")?, field("x_mm")?, field("y_mm")?, field("heading_deg")?);
     (t >= 0.0 && t <= f64::from(u32::MAX) && x.is_finite() && y.is_finite() && h.is_finite())
-        .then(|| (t as u32, PoseF64::new(x, y, h.to_radians())))
+        .then_some((t as u32, MapPose { x, y, heading_deg: h }))
 }
 
 fn mm(dmm: i32) -> f64 {
@@ -99,16 +113,16 @@ fn mm(dmm: i32) -> f64 {
 }
 
 /// A row's estimated pose.
-fn row_pose(r: &TelemetryRow) -> PoseF64 {
-    PoseF64::new(mm(r.x_dmm), mm(r.y_dmm), (f64::from(r.heading_mdeg) / 1000.0).to_radians())
+fn row_pose(r: &TelemetryRow) -> MapPose {
+    MapPose { x: mm(r.x_dmm), y: mm(r.y_dmm), heading_deg: f64::from(r.heading_mdeg) / 1000.0 }
 }
 
 /// How far ahead of the nose the body's outline points, mm (a drawing's
 /// mark of the heading, not a part of the robot).
 const HEADING_MARK_MM: f64 = 15.0;
 
-fn pose_json(p: &PoseF64) -> Value {
-    json!({ "x": p.x, "y": p.y, "heading": p.theta.to_degrees().rem_euclid(360.0) })
+fn pose_json(p: &MapPose) -> Value {
+    json!({ "x": p.x, "y": p.y, "heading": p.heading_deg.rem_euclid(360.0) })
 }
 
 /// The lidars as the page draws them: name, colour (replay's), mount.
@@ -201,7 +215,7 @@ impl Live {
         }
     }
 
-    fn estimate(&self, pose: &PoseF64) -> Value {
+    fn estimate(&self, pose: &MapPose) -> Value {
         let (state, sigma) = match self.fix {
             Fix::Unknown => ("unknown", Value::Null),
             Fix::Lost => ("lost", Value::Null),
@@ -225,8 +239,8 @@ impl Live {
         let mut rays = Vec::new();
         for ((name, color, mount), dmm) in LIDARS.iter().zip([r.front_dmm, r.right_dmm]) {
             let Some(d) = dmm else { continue };
-            let ray = Ray::of_reading(&pose, mount, mm(d), color);
-            rays.push(json!({ "lidar": name, "from": [ray.from.0, ray.from.1], "to": [ray.to.0, ray.to.1] }));
+            let (from, to) = mount.beam_f64(pose.x, pose.y, pose.heading_deg.to_radians(), mm(d));
+            rays.push(json!({ "lidar": name, "color": color, "from": [from.0, from.1], "to": [to.0, to.1] }));
         }
         let lidar = |raw: Option<u16>, d: Option<i32>| match raw {
             None => Value::Null,

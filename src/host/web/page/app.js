@@ -87,7 +87,7 @@ function onRow(r) {
   // the fresh lidar readings: from the lidar to where the beam ended
   const rays = $("rays");
   for (const ray of r.rays) {
-    const color = state.hello.lidars.find((l) => l.name === ray.lidar)?.color || "#000";
+    const color = ray.color;
     const [x1, y1] = px(ray.from[0], ray.from[1]);
     const [x2, y2] = px(ray.to[0], ray.to[1]);
     const g = el("g", {}, rays);
