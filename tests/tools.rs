@@ -163,7 +163,7 @@ fn teleop_web_serves_sim_pty_with_its_truth_and_refuses_a_port_in_use() {
         .unwrap();
     let mut pty = String::new();
     BufReader::new(sim.stdout.take().unwrap()).read_line(&mut pty).unwrap();
-    let mut teleop = tool("teleop").args([pty.trim(), "--web", &addr]).stderr(Stdio::piped()).spawn().unwrap();
+    let teleop = tool("teleop").args([pty.trim(), "--web", &addr]).stderr(Stdio::piped()).spawn().unwrap();
     let start = Instant::now();
     let mut ws = loop {
         match tungstenite::connect(format!("ws://{addr}/ws")) {
