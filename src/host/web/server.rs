@@ -59,6 +59,13 @@ const MAX_HEAD: usize = 8 * 1024;
 /// A connection's poll period: how long a read waits for the page before
 /// the queue is written out again (rows leave within this of arriving).
 const POLL: Duration = Duration::from_millis(5);
+/// Largest WebSocket message or frame tungstenite buffers, bytes: a
+/// bound on memory; the commands' own limit is far lower
+/// ([`WEB_MAX_MESSAGE`], checked by [`parse_command`]).
+const MAX_FRAME: usize = 64 * 1024;
+/// A close frame's reason holds at most this many bytes (RFC 6455 5.5:
+/// 125 bytes of payload, 2 of them the code).
+const MAX_REASON: usize = 123;
 /// A page that takes this long to take a message is gone.
 const WRITE_TIMEOUT: Duration = Duration::from_secs(2);
 
@@ -226,7 +233,7 @@ fn connection(mut stream: TcpStream, id: u64, events: &Sender<Event>, stop: &Ato
     };
     let path = req.uri().path().to_string();
     if is_upgrade(&req) && path == WS_PATH {
-        let config = WebSocketConfig::default().max_message_size(Some(64 * 1024)).max_frame_size(Some(64 * 1024));
+        let config = WebSocketConfig::default().max_message_size(Some(MAX_FRAME)).max_frame_size(Some(MAX_FRAME));
         let ws = tungstenite::accept_hdr_with_config(stream, same_site, Some(config)).map_err(io::Error::other)?;
         return page(ws, id, events, stop);
     }
@@ -244,7 +251,10 @@ fn connection(mut stream: TcpStream, id: u64, events: &Sender<Event>, stop: &Ato
 
 /// Why a page's connection is closed by the server.
 fn close(ws: &mut WebSocket<TcpStream>, code: CloseCode, reason: &str) {
-    let reason: String = reason.chars().take(120).collect();
+    let mut reason = reason.to_string();
+    while reason.len() > MAX_REASON {
+        reason.pop();
+    }
     let _ = ws.close(Some(CloseFrame { code, reason: reason.into() }));
     // let the close frame go out and the page answer it, briefly
     let until = Instant::now() + Duration::from_millis(200);
