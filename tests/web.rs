@@ -230,10 +230,13 @@ fn malformed_messages_close_that_page_and_change_nothing() {
         (Message::text(format!(r#"{{"cmd":"{}"}}"#, "x".repeat(300))), CloseCode::Policy, "message of"),
         (Message::binary(vec![1, 2, 3]), CloseCode::Unsupported, "binary"),
     ] {
-        // the pilot holds forward the whole time, as a page does
-        let t0 = Instant::now();
+        // the pilot holds forward the whole time, as a page does (from its
+        // first hold: between rounds its hold may run out, as it should)
         let mut other = page(&tool.addr);
         messages(&mut other, 30);
+        send(&mut pilot, r#"{"cmd":"hold","motion":"fwd"}"#);
+        messages(&mut pilot, 20);
+        let t0 = Instant::now();
         other.send(bad).unwrap();
         let mut closed = None;
         while t0.elapsed() < Duration::from_millis(600) {
