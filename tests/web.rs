@@ -198,21 +198,24 @@ fn a_second_page_watches_until_it_takes_over() {
     assert!(!tool.sent_since(t0).iter().any(|l| l.starts_with("fwd")), "{:?}", tool.sent_since(t0));
     // the pilot drives
     send(&mut a, r#"{"cmd":"hold","motion":"fwd"}"#);
-    messages(&mut a, 60);
+    messages(&mut a, 150);
     assert!(tool.sent_since(t0).iter().any(|l| l.starts_with("fwd ")), "{:?}", tool.sent_since(t0));
-    // the watcher takes over: the robot stops, the old pilot is told
+    // the watcher takes over while the pilot holds: the robot stops, the old pilot is told
+    send(&mut a, r#"{"cmd":"hold","motion":"fwd"}"#);
     let t1 = Instant::now();
     send(&mut b, r#"{"cmd":"take"}"#);
     let (msgs, _) = messages(&mut a, 100);
     assert!(of_type(&msgs, "notice")[0]["text"].as_str().unwrap().contains("took over"));
     assert_eq!(of_type(&msgs, "state").last().unwrap()["role"], "viewer");
-    assert_eq!(tool.sent_since(t1).first().map(String::as_str), Some("stop"));
     let (msgs, _) = messages(&mut b, 250);
+    let after = tool.sent_since(t1);
+    let stop = after.iter().position(|l| l == "stop").unwrap_or_else(|| panic!("no stop: {after:?}"));
+    assert!(after[stop..].iter().all(|l| l == "stop"), "nothing drives after the take: {after:?}");
     assert_eq!(of_type(&msgs, "state").last().unwrap()["role"], "pilot");
     // any page may stop the robot, watchers too (even with nothing held: a `locate` ends)
     let t2 = Instant::now();
     send(&mut a, r#"{"cmd":"stop"}"#);
-    messages(&mut a, 60);
+    messages(&mut a, 150);
     assert_eq!(tool.sent_since(t2), ["stop"]);
     let (report, _) = tool.finish();
     assert_eq!(report.pages, 2);
@@ -274,7 +277,8 @@ fn a_silent_or_gone_pilot_stops_the_robot() {
     let sent = tool.sent_since(held);
     assert!(sent.iter().filter(|l| l.starts_with("cw ")).count() >= 2, "refreshed while held: {sent:?}");
     let at = stop_after(&tool, held).expect("stopped");
-    assert!((u128::from(WEB_HOLD_MS)..u128::from(WEB_HOLD_MS) + 60).contains(&at), "stop {at} ms after the last hold");
+    // (the upper margin is for a loaded machine; the loop polls every few ms)
+    assert!((u128::from(WEB_HOLD_MS)..u128::from(WEB_HOLD_MS) + 100).contains(&at), "stop {at} ms after the last hold");
     // gone (a tab closed while holding): stop at once
     send(&mut pilot, r#"{"cmd":"hold","motion":"fwd"}"#);
     messages(&mut pilot, 60);
@@ -282,6 +286,6 @@ fn a_silent_or_gone_pilot_stops_the_robot() {
     drop(pilot);
     std::thread::sleep(Duration::from_millis(200));
     let at = stop_after(&tool, closed).expect("stopped");
-    assert!(at < 60, "stop {at} ms after the page went");
+    assert!(at < 100, "stop {at} ms after the page went");
     tool.finish();
 }
