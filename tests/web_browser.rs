@@ -298,8 +298,9 @@ fn the_page_draws_drives_and_a_closed_tab_stops_the_robot() {
     let ahead = (moved.x - truth.x) * truth.theta.cos() + (moved.y - truth.y) * truth.theta.sin();
     assert!(ahead > 80.0, "forward moved the robot ahead: {truth:?} -> {moved:?}");
     let drawn = drawn_pose(&mut cdp, length_x).unwrap();
-    // while moving at ~0.14 m/s the drawing lags the truth by a row or two
-    assert!(drawn.distance(&moved) < 30.0, "drawn {drawn:?} follows {moved:?}");
+    // while moving at ~0.14 m/s the drawing lags the truth by a row (10 Hz:
+    // 14 mm) and the link's latency (more on a loaded machine)
+    assert!(drawn.distance(&moved) < 45.0, "drawn {drawn:?} follows {moved:?}");
     let shot = cdp.call("Page.captureScreenshot", json!({ "format": "png" }));
     let png = data_encoding::BASE64.decode(shot["data"].as_str().unwrap().as_bytes()).unwrap();
     let out = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("target/web-e2e.png");
