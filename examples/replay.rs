@@ -129,9 +129,7 @@ fn lidar_rays<'a>(samples: &[replay::Sample], estimates: &[replay::Estimate]) ->
             (s.right_mm, geometry::RIGHT_LIDAR, lidar::RIGHT, "#2ca02c"),
         ] {
             let Some(d) = reading.and_then(|r| model.range(r).distance()) else { continue };
-            let (x, y, dir) = pose.lidar_ray(&mount);
-            let range = d.to_mm_f64() - PoseF64::along_beam_mm(&mount);
-            rays.push(Ray { from: (x, y), to: (x + range * dir.cos(), y + range * dir.sin()), color });
+            rays.push(Ray::of_reading(&pose, &mount, d.to_mm_f64(), color));
         }
     }
     rays

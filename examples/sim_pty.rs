@@ -9,6 +9,7 @@
 //!   --no-noise         exact run: no motion, lidar or compass noise
 //!   --start X,Y,DEG    true start pose (default from config::sim)
 //!   --duration S       stop after S seconds of wall time (default: run until killed)
+//!   --truth-hz HZ      also send the true pose as `# truth` lines HZ times a second (teleop --web draws it)
 //! ```
 //! Then, in another terminal: `cargo run --example teleop -- /dev/pts/N`.
 //! Ctrl-C (or the end of `--duration`) stops the server and removes the link.
@@ -28,10 +29,11 @@ struct Args {
     cfg: SimConfig,
     link: Option<String>,
     duration_s: Option<f64>,
+    truth_hz: u32,
 }
 
 fn parse_args() -> Result<Args, String> {
-    let mut a = Args { cfg: SimConfig::default(), link: None, duration_s: None };
+    let mut a = Args { cfg: SimConfig::default(), link: None, duration_s: None, truth_hz: 0 };
     let mut it = std::env::args().skip(1);
     while let Some(flag) = it.next() {
         let mut value = |name: &str| it.next().ok_or(format!("{name} needs a value"));
@@ -42,6 +44,13 @@ fn parse_args() -> Result<Args, String> {
             "--start" => {
                 let (x, y, deg) = args::start(&value("--start")?, a.cfg.arena.length_x_mm(), a.cfg.arena.width_y_mm())?;
                 a.cfg.start = PoseF64::new(x, y, deg.to_radians());
+            }
+            "--truth-hz" => {
+                a.truth_hz = value("--truth-hz")?.parse().map_err(|_| "--truth-hz wants an integer")?;
+                let most = u32::from(paperbot::config::serial::MAX_TELEMETRY_HZ);
+                if a.truth_hz > most {
+                    return Err(format!("--truth-hz wants 0..{most} (telemetry's fastest)"));
+                }
             }
             "--duration" => a.duration_s = Some(args::number("--duration", &value("--duration")?)?),
             f => return Err(format!("unknown option {f}")),
@@ -54,7 +63,7 @@ fn usage() -> String {
     include_str!("sim_pty.rs")
         .lines()
         .skip(5)
-        .take(8)
+        .take(9)
         .map(|l| l.strip_prefix("//! ").unwrap_or(l.trim_start_matches("//!")))
         .filter(|l| !l.starts_with("```"))
         .collect::<Vec<_>>()
@@ -124,7 +133,7 @@ fn main() -> ExitCode {
             stop.store(true, std::sync::atomic::Ordering::Relaxed);
         });
     }
-    let mut server = Server::new(SimRobot::new(args.cfg));
+    let mut server = Server::new(SimRobot::new(args.cfg)).with_truth(args.truth_hz);
     let result = server.run(&mut master, &stop);
     drop(slave);
     if let Some(link) = &args.link {

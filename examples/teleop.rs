@@ -17,6 +17,9 @@
 //!   --start          start the robot's mission (after --mission), then unplug the cable
 //!   --log-hz HZ      with --start: the on-board log's rows per second (default: the robot's)
 //!   --dump FILE      download the on-board log as telemetry CSV (with --record also as a replay log)
+//!   --web [ADDR:PORT] serve a live map and drive pad to browsers instead of the terminal UI
+//!                    (default 127.0.0.1:8080; 0.0.0.0:8080 lets a phone in; Ctrl-C quits)
+//!   --arena LxW      with --web: the box drawn, mm (default config::arena)
 //! ```
 //! Keys: arrows / WASD drive, space stops, + / - speed level, q quits.
 
@@ -30,10 +33,13 @@ use paperbot::host::teleop::{
     action, keys, link, mission, parse_plan, run_line_mode, Action, Dashboard, Driver, Key, LineModeOptions,
     LineReader, Panel, Recorder,
 };
+use paperbot::host::web::{self, server::is_loopback, WebOptions, WebServer};
 use ratatui::crossterm::event::{self, Event, KeyCode, KeyEventKind, KeyModifiers};
 use ratatui::layout::{Constraint, Layout};
 use ratatui::widgets::{Block, Paragraph, Wrap};
 use serialport::{SerialPort, SerialPortType};
+use std::sync::atomic::AtomicBool;
+use std::sync::Arc;
 
 /// Read timeout of the port: the UI loop's pace when no key comes, ms.
 const POLL_MS: u64 = 5;
@@ -53,11 +59,13 @@ struct Args {
     start: bool,
     log_hz: Option<u16>,
     dump: Option<String>,
+    web: Option<String>,
+    arena: Option<(f64, f64)>,
 }
 
 fn parse_args() -> Result<Args, String> {
     let mut a = Args { baud: config::serial::BAUD, linger_s: 1.0, keepalive: true, ..Args::default() };
-    let mut it = std::env::args().skip(1);
+    let mut it = std::env::args().skip(1).peekable();
     while let Some(flag) = it.next() {
         let mut value = |name: &str| it.next().ok_or(format!("{name} needs a value"));
         match flag.as_str() {
@@ -78,6 +86,12 @@ fn parse_args() -> Result<Args, String> {
             "--start" => a.start = true,
             "--log-hz" => a.log_hz = Some(value("--log-hz")?.parse().map_err(|_| "--log-hz wants 0..100")?),
             "--dump" => a.dump = Some(value("--dump")?),
+            // the address is optional: the next word is one if it has a ':' (a port's path has none)
+            "--web" => {
+                let addr = it.next_if(|v| v.contains(':') && !v.starts_with(['-', '/']));
+                a.web = Some(addr.unwrap_or_else(|| config::teleop::WEB_ADDR.into()));
+            }
+            "--arena" => a.arena = Some(paperbot::host::args::arena(&value("--arena")?)?),
             f if f.starts_with('-') && f != "-" => return Err(format!("unknown option {f}")),
             p if a.port.is_none() => a.port = Some(p.to_string()),
             p => return Err(format!("one port only ({p}?)")),
@@ -90,7 +104,7 @@ fn usage() -> String {
     include_str!("teleop.rs")
         .lines()
         .skip(4)
-        .take(18)
+        .take(21)
         .map(|l| l.strip_prefix("//! ").unwrap_or(l.trim_start_matches("//!")))
         .filter(|l| !l.starts_with("```"))
         .collect::<Vec<_>>()
@@ -330,7 +344,12 @@ fn run() -> Result<(), String> {
             Some(mission::parse_mission_file(&text).map_err(|e| format!("{path}: {e}"))?)
         }
     };
-    if plan.is_none() && !missions && !(io::stdout().is_terminal() && io::stdin().is_terminal()) {
+    // bound before the port is opened: a port in use fails at once
+    let web = args.web.as_deref().map(WebServer::bind).transpose()?;
+    if web.is_some() && (plan.is_some() || missions) {
+        return Err("--web drives from the page: not with --lines, --mission, --start or --dump".into());
+    }
+    if web.is_none() && plan.is_none() && !missions && !(io::stdout().is_terminal() && io::stdin().is_terminal()) {
         return Err("not a terminal: use --lines FILE (or '-' for stdin) for the line mode".into());
     }
     let port_name = pick_port(&args)?;
@@ -352,29 +371,34 @@ fn run() -> Result<(), String> {
         config::timing::TELEMETRY_HZ as u16
     });
 
-    if missions {
+    if let Some(server) = web {
+        let arena = args.arena.unwrap_or(WebOptions::default().arena);
+        run_web(&mut *port, server, WebOptions { rate_hz: Some(rate), arena }, &mut recorder, &mut raw)
+            .map_err(|e| format!("{port_name}: {e}"))?;
+    } else if missions {
         return run_missions(&args, steps, &mut *port, &port_name, recorder.as_mut());
-    }
-    match plan {
-        Some(plan) => {
-            let opts = LineModeOptions {
-                linger_ms: (args.linger_s * 1000.0) as u64,
-                keepalive: args.keepalive,
-                rate_hz: Some(rate),
-                ..LineModeOptions::default()
-            };
-            let mut out = Tee(io::stdout().lock(), raw.take());
-            let report = run_line_mode(&mut *port, plan, opts, &mut out, recorder.as_mut())
-                .map_err(|e| format!("{port_name}: {e}"))?;
-            eprintln!(
-                "teleop: sent {} lines and {} keep-alive repeats; {} telemetry rows, {} refused",
-                report.sent, report.refreshes, report.rows, report.errors
-            );
-        }
-        None => {
-            link::start_telemetry(&mut *port, rate).map_err(|e| format!("{port_name}: {e}"))?;
-            run_tui(&mut *port, &mut recorder, &mut raw, args.record.as_deref())
-                .map_err(|e| format!("{port_name}: {e}"))?;
+    } else {
+        match plan {
+            Some(plan) => {
+                let opts = LineModeOptions {
+                    linger_ms: (args.linger_s * 1000.0) as u64,
+                    keepalive: args.keepalive,
+                    rate_hz: Some(rate),
+                    ..LineModeOptions::default()
+                };
+                let mut out = Tee(io::stdout().lock(), raw.take());
+                let report = run_line_mode(&mut *port, plan, opts, &mut out, recorder.as_mut())
+                    .map_err(|e| format!("{port_name}: {e}"))?;
+                eprintln!(
+                    "teleop: sent {} lines and {} keep-alive repeats; {} telemetry rows, {} refused",
+                    report.sent, report.refreshes, report.rows, report.errors
+                );
+            }
+            None => {
+                link::start_telemetry(&mut *port, rate).map_err(|e| format!("{port_name}: {e}"))?;
+                run_tui(&mut *port, &mut recorder, &mut raw, args.record.as_deref())
+                    .map_err(|e| format!("{port_name}: {e}"))?;
+            }
         }
     }
     if let (Some(rec), Some(path)) = (&recorder, &args.record) {
@@ -383,6 +407,44 @@ fn run() -> Result<(), String> {
             eprintln!("teleop: replay it with `cargo run --example replay -- {path} --start {start}`");
         }
     }
+    Ok(())
+}
+
+/// `--web`: serves the page until Ctrl-C (or `kill`); the robot is stopped then.
+fn run_web(
+    port: &mut dyn SerialPort,
+    server: WebServer,
+    opts: WebOptions,
+    recorder: &mut Option<Recorder<BufWriter<File>>>,
+    raw: &mut Option<BufWriter<File>>,
+) -> io::Result<()> {
+    let addr = server.local_addr();
+    if !is_loopback(&addr) {
+        eprintln!(
+            "teleop: WARNING: serving on {addr}, not only this machine: anyone who can reach this port \
+             can watch AND DRIVE the robot (use 127.0.0.1 to keep it to this laptop)"
+        );
+    }
+    let shown =
+        if addr.ip().is_unspecified() { format!("<this machine's address>:{}", addr.port()) } else { addr.to_string() };
+    eprintln!("teleop: open http://{shown}/ in a browser; Ctrl-C stops the robot and quits");
+    let stop = Arc::new(AtomicBool::new(false));
+    for signal in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+        signal_hook::flag::register(signal, Arc::clone(&stop))?;
+    }
+    let report = web::run(port, server, opts, &stop, |line, row| {
+        if let Some(r) = raw.as_mut() {
+            writeln!(r, "{line}")?;
+        }
+        if let (Some(rec), Some(row)) = (recorder.as_mut(), row) {
+            rec.record(row)?;
+        }
+        Ok(())
+    })?;
+    eprintln!(
+        "teleop: {} pages, {} rows, {} commands sent, {} messages dropped for slow pages",
+        report.pages, report.rows, report.sent, report.dropped
+    );
     Ok(())
 }
 

@@ -1,6 +1,7 @@
 //! The host tools (`examples/`) as a user runs them: `--help` on stdout
 //! with exit code 0, bad options and bad input refused with a message and a
-//! non-zero exit code, the files they write. `cargo test` builds the
+//! non-zero exit code, the files they write; `teleop --web` serving
+//! `sim_pty --truth-hz` as processes. `cargo test` builds the
 //! examples first (`cargo build --examples` when running this file alone).
 
 use std::path::PathBuf;
@@ -137,4 +138,53 @@ fn simulate_fails_when_the_robot_refuses_a_script_command_and_quiet_prints_nothi
     assert!(err.ends_with('\n'), "{err:?}");
     let out = run("simulate", &["--print-script"]);
     assert!(out.status.success() && text(&out.stdout).ends_with('\n'));
+}
+
+#[test]
+fn teleop_web_serves_sim_pty_with_its_truth_and_refuses_a_port_in_use() {
+    use std::io::{BufRead, BufReader};
+    use std::process::Stdio;
+    use std::time::{Duration, Instant};
+    // a port in use: refused before the robot's port is even opened
+    let taken = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let addr = taken.local_addr().unwrap().to_string();
+    let out = run("teleop", &["/dev/null", "--web", &addr]);
+    assert!(!out.status.success() && text(&out.stderr).contains("the port is in use"), "{}", text(&out.stderr));
+    drop(taken);
+    let out = run("sim_pty", &["--truth-hz", "1000"]);
+    assert!(!out.status.success() && text(&out.stderr).contains("--truth-hz wants 0..100"));
+
+    // the two commands of docs/web.md, as processes
+    let mut sim = tool("sim_pty")
+        .args(["--no-noise", "--truth-hz", "20", "--duration", "30"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let mut pty = String::new();
+    BufReader::new(sim.stdout.take().unwrap()).read_line(&mut pty).unwrap();
+    let teleop = tool("teleop").args([pty.trim(), "--web", &addr]).stderr(Stdio::piped()).spawn().unwrap();
+    let start = Instant::now();
+    let mut ws = loop {
+        match tungstenite::connect(format!("ws://{addr}/ws")) {
+            Ok((ws, _)) => break ws,
+            Err(e) => assert!(start.elapsed() < Duration::from_secs(10), "teleop --web never served: {e}"),
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    };
+    let mut seen = std::collections::BTreeSet::new();
+    while !(seen.contains("row") && seen.contains("truth")) {
+        assert!(start.elapsed() < Duration::from_secs(15), "only {seen:?}");
+        let msg: serde_json::Value = serde_json::from_str(ws.read().unwrap().to_text().unwrap()).unwrap();
+        seen.insert(msg["type"].as_str().unwrap().to_string());
+    }
+    assert!(seen.contains("hello"));
+    // Ctrl-C stops the robot and quits cleanly
+    let int = |pid: u32| Command::new("kill").args(["-INT", &pid.to_string()]).status().unwrap();
+    assert!(int(teleop.id()).success());
+    let out = teleop.wait_with_output().unwrap();
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(text(&out.stderr).contains("1 pages"), "{}", text(&out.stderr));
+    int(sim.id());
+    sim.wait().unwrap();
 }

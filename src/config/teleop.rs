@@ -30,3 +30,26 @@ pub const MESSAGES_SHOWN: usize = 8;
 /// within a tick or two; a robot still booting may take longer, and the
 /// run then goes on without it.
 pub const ANSWER_WAIT_MS: u32 = 1_000;
+
+/// `teleop --web`: the address the page is served on when none is given
+/// (loopback: only this laptop; `0.0.0.0:8080` lets a phone in).
+pub const WEB_ADDR: &str = "127.0.0.1:8080";
+/// A motion held on the page lasts this long after the page last asked
+/// for it, ms: the page repeats a held motion every [`REFRESH_MS`], so one
+/// late or lost repeat is forgiven, and a page that stops asking (a tab
+/// closed without a goodbye, a phone gone to sleep, a dropped network)
+/// gets `stop` sent this long after its last word, before the robot's
+/// own deadman would fire.
+pub const WEB_HOLD_MS: u32 = 2 * REFRESH_MS;
+const _: () = assert!(WEB_HOLD_MS > REFRESH_MS && WEB_HOLD_MS < DEADMAN_MS);
+/// The driver's and link's state goes to every page this often, ms (rows
+/// go as they come).
+pub const WEB_STATE_MS: u32 = 200;
+/// Longest message a page may send, bytes: its commands are a few dozen
+/// bytes; anything longer is malformed and closes that page's connection.
+pub const WEB_MAX_MESSAGE: usize = 256;
+/// Messages queued for one page, at most: a page that cannot keep up
+/// (a slow phone) loses the newest rows, not the laptop's memory.
+pub const WEB_QUEUE: usize = 512;
+/// Points of the trail the page keeps (at 10 rows a second, 5 minutes).
+pub const WEB_TRAIL_POINTS: usize = 3_000;

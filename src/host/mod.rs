@@ -5,3 +5,5 @@
 
 pub mod args;
 pub mod teleop;
+#[cfg(feature = "web")]
+pub mod web;

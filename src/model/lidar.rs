@@ -16,6 +16,38 @@ pub struct LidarMount {
     pub direction: Angle,
 }
 
+/// The mount's geometry in f64 for the host's pictures and simulator
+/// (`sim::body`, `sim::svg`, the teleop tool's page): never on the robot.
+#[cfg(feature = "std")]
+impl LidarMount {
+    /// Where this lidar sits and which way it looks on a body whose
+    /// reference point is at (`x`, `y`) mm heading `theta` (radians
+    /// clockwise from north): (x, y) in mm and the beam's direction.
+    pub fn placed_f64(&self, x: f64, y: f64, theta: f64) -> (f64, f64, f64) {
+        let (s, c) = theta.sin_cos();
+        let (f, r) = (self.forward.to_mm_f64(), self.right.to_mm_f64());
+        // in (x north, y east) the heading is (cos, sin) and the car's right (-sin, cos)
+        (x + f * c - r * s, y + f * s + r * c, theta + self.direction.to_radians_f64())
+    }
+
+    /// How far the lidar sits ahead of the reference point along its own
+    /// beam, mm (the lidar model's distance is the range from the mount
+    /// plus this).
+    pub fn along_beam_mm(&self) -> f64 {
+        let (bs, bc) = self.direction.to_radians_f64().sin_cos();
+        self.forward.to_mm_f64() * bc + self.right.to_mm_f64() * bs
+    }
+
+    /// A reading's beam on that body, from the lidar to where it ended:
+    /// `distance_mm` is the lidar model's distance from the reference point
+    /// along the beam, so the beam runs that less [`Self::along_beam_mm`].
+    pub fn beam_f64(&self, x: f64, y: f64, theta: f64, distance_mm: f64) -> ((f64, f64), (f64, f64)) {
+        let (lx, ly, dir) = self.placed_f64(x, y, theta);
+        let range = distance_mm - self.along_beam_mm();
+        ((lx, ly), (lx + range * dir.cos(), ly + range * dir.sin()))
+    }
+}
+
 /// One lidar's fitted line and its valid reading window.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
 pub struct LidarModel {

@@ -49,17 +49,13 @@ impl PoseF64 {
     /// Where a lidar mounted at `mount` sits and which way it looks
     /// (x, y in mm, direction in radians clockwise from north).
     pub fn lidar_ray(&self, mount: &LidarMount) -> (f64, f64, f64) {
-        let (s, c) = self.theta.sin_cos();
-        let (f, r) = (mount.forward.to_mm_f64(), mount.right.to_mm_f64());
-        // in (x north, y east) the heading is (cos, sin) and the car's right (-sin, cos)
-        (self.x + f * c - r * s, self.y + f * s + r * c, self.theta + mount.direction.to_radians_f64())
+        mount.placed_f64(self.x, self.y, self.theta)
     }
     /// How far a lidar mounted at `mount` sits ahead of the reference
     /// point along its own beam, mm (the lidar model's distance is the
     /// range from the mount plus this).
     pub fn along_beam_mm(mount: &LidarMount) -> f64 {
-        let (bs, bc) = mount.direction.to_radians_f64().sin_cos();
-        mount.forward.to_mm_f64() * bc + mount.right.to_mm_f64() * bs
+        mount.along_beam_mm()
     }
     /// Signed heading difference `self - other`, radians in (-pi, pi].
     pub fn heading_error(&self, other: &PoseF64) -> f64 {

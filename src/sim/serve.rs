@@ -10,15 +10,23 @@
 //! in a bounded queue here; past [`MAX_PENDING`] new lines are dropped and
 //! counted, as a real UART's bytes are lost when nobody listens.
 //!
+//! With [`Server::with_truth`] the output also carries the simulator's true
+//! pose as `# truth ...` lines ([`truth_line`]) at a chosen rate, so a tool
+//! can draw it beside the estimate (`teleop --web`); a real robot sends
+//! none, and tools that do not know them show them as messages.
+//!
 //! The port is anything `Read + Write` whose reads and writes return at once
 //! when they cannot proceed (`TimedOut`/`WouldBlock`), e.g. a `serialport`
 //! port with a zero timeout.
 
+use std::format;
 use std::io::{self, ErrorKind, Read, Write};
+use std::string::String;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 use std::vec::Vec;
 
+use super::body::PoseF64;
 use super::robot::SimRobot;
 use crate::control::TICK_US;
 
@@ -46,6 +54,20 @@ pub struct Server {
     robot: SimRobot,
     pending: Vec<u8>,
     stats: ServeStats,
+    /// `# truth` lines: their period and when the next is due, us of simulated time.
+    truth: Option<(u64, u64)>,
+}
+
+/// The `# truth t_ms=T x_mm=X y_mm=Y heading_deg=H` line for the true pose
+/// at `t_ms` of simulated time (the firmware's clock): mm to 0.1, degrees
+/// clockwise from north in 0..360 to 0.01.
+pub fn truth_line(t_ms: u64, p: &PoseF64) -> String {
+    format!(
+        "# truth t_ms={t_ms} x_mm={:.1} y_mm={:.1} heading_deg={:.2}",
+        p.x,
+        p.y,
+        p.theta.to_degrees().rem_euclid(360.0)
+    )
 }
 
 fn idle(e: &io::Error) -> bool {
@@ -54,7 +76,15 @@ fn idle(e: &io::Error) -> bool {
 
 impl Server {
     pub fn new(robot: SimRobot) -> Server {
-        Server { robot, pending: Vec::new(), stats: ServeStats::default() }
+        Server { robot, pending: Vec::new(), stats: ServeStats::default(), truth: None }
+    }
+
+    /// Also sends the true pose `hz` times a second of simulated time (0:
+    /// never; at most once a loop period), as [`truth_line`]s among the
+    /// robot's lines.
+    pub fn with_truth(mut self, hz: u32) -> Server {
+        self.truth = (hz > 0).then(|| (1_000_000 / u64::from(hz), 0));
+        self
     }
 
     /// One loop period without waiting: input, one tick, output.
@@ -78,7 +108,15 @@ impl Server {
         }
         self.robot.tick();
         self.stats.ticks += 1;
-        for line in self.robot.take_output() {
+        let mut lines = self.robot.take_output();
+        if let Some((period, next)) = self.truth.as_mut() {
+            let now = self.robot.now_us();
+            if now >= *next {
+                *next = now + *period;
+                lines.push(truth_line(now / 1000, &self.robot.truth()));
+            }
+        }
+        for line in lines {
             if self.pending.len() + line.len() + 2 > MAX_PENDING {
                 self.stats.dropped_lines += 1;
                 continue;

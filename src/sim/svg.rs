@@ -4,6 +4,7 @@
 
 use super::arena::Arena;
 use super::body::PoseF64;
+use crate::model::lidar::LidarMount;
 use std::fmt::Write;
 use std::string::String;
 
@@ -28,6 +29,16 @@ pub struct Ray<'a> {
     pub from: (f64, f64),
     pub to: (f64, f64),
     pub color: &'a str,
+}
+
+impl<'a> Ray<'a> {
+    /// A reading of the lidar at `mount` on the body at `pose`, from the
+    /// lidar to where the beam ended ([`LidarMount::beam_f64`]: `distance_mm`
+    /// is the lidar model's distance from the reference point along the beam).
+    pub fn of_reading(pose: &PoseF64, mount: &LidarMount, distance_mm: f64, color: &'a str) -> Ray<'a> {
+        let (from, to) = mount.beam_f64(pose.x, pose.y, pose.theta, distance_mm);
+        Ray { from, to, color }
+    }
 }
 
 /// Renders the arena and the tracks as a standalone SVG document.

@@ -39,6 +39,8 @@ pub struct Dashboard {
     last_ok: Option<String>,
     messages: VecDeque<String>,
     max_messages: usize,
+    /// Messages added since the start (shown or since dropped).
+    added: u64,
     /// The newest reading of each sensor and its row time (rows leave a
     /// field empty when the sensor had nothing new): front and right lidar
     /// (raw mm, distance 0.1 mm), compass (millidegrees, raw counts).
@@ -121,6 +123,13 @@ impl Dashboard {
             self.messages.pop_front();
         }
         self.messages.push_back(text);
+        self.added = self.added.saturating_add(1);
+    }
+
+    /// Messages added since the start: a line that changed this count is
+    /// shown (the newest of [`Dashboard::messages`]).
+    pub fn messages_added(&self) -> u64 {
+        self.added
     }
 
     pub fn last_row(&self) -> Option<&TelemetryRow> {
