@@ -54,6 +54,10 @@ const FRC1_INTERRUPT_MASK: u32 = 1 << 9;
 /// modes: GPIO15, GPIO0, GPIO2 = 0, 1, 1 boots from flash).
 const STRAPPING_MASK: u32 = (1 << config::pins::FRONT_XSHUT_GPIO) | (1 << config::pins::RIGHT_XSHUT_GPIO);
 
+// Upstream rustc has no inline assembly for Xtensa: `cargo fw-image` links
+// xtensa/asm/handover.S (and sets this cfg); the esp toolchain
+// (`cargo +esp fw-build`) assembles the same three steps inline.
+#[cfg(paperbot_asm_objects)]
 extern "C" {
     /// xtensa/asm/handover.S: INTENABLE = 0, then PS = UM (INTLEVEL 0,
     /// EXCM clear).
@@ -67,9 +71,26 @@ extern "C" {
 /// (FRC1: [`ServoTimer::start`]), so INTENABLE holds exactly those bits.
 /// Call first thing in `main`.
 pub fn take_over_interrupts() {
-    // SAFETY: a leaf in IRAM that writes INTENABLE and PS only; nothing is
-    // enabled yet, so no handler can run between the two writes.
-    unsafe { paperbot_interrupt_handover() }
+    // SAFETY: writes INTENABLE and PS only; nothing is enabled yet, so no
+    // handler can run between the two writes.
+    #[cfg(paperbot_asm_objects)]
+    unsafe {
+        paperbot_interrupt_handover()
+    }
+    // SAFETY: as above; the steps of xtensa/asm/handover.S (PS.UM = 0x20).
+    #[cfg(not(paperbot_asm_objects))]
+    unsafe {
+        core::arch::asm!(
+            "movi {t}, 0",
+            "wsr.intenable {t}",
+            "rsync",
+            "movi {t}, 0x20",
+            "wsr.ps {t}",
+            "rsync",
+            t = out(reg) _,
+            options(nostack)
+        )
+    }
 }
 
 #[inline(always)]

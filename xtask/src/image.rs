@@ -196,14 +196,18 @@ fn nightly_cargo(
         .arg("--target-dir")
         .arg(work.join("build"));
     let mut config = vec![format!("resolver.lockfile-path=\"{}\"", lock.display())];
+    // The firmware calls our assembly (xtensa/asm/) where the esp toolchain
+    // would take inline `asm!` (src/board/esp8266.rs).
+    let mut rustflags = vec!["\"--cfg\", \"paperbot_asm_objects\"".to_string()];
     if verb == "build" {
         // xt-link.sh assembles the LLVM assembly of the (fat-LTO, one
         // codegen unit) firmware and of compiler_builtins with GNU as.
         config.push("profile.firmware.package.paperbot.rustflags=[\"--emit=asm,link\"]".into());
         config.push("profile.firmware.package.compiler_builtins.rustflags=[\"--emit=asm,link\"]".into());
         config.push(format!("target.xtensa-esp8266-none-elf.linker=\"{}\"", root.join("xtensa/xt-link.sh").display()));
-        config.push(format!("target.xtensa-esp8266-none-elf.rustflags=[{}]", link_args.join(", ")));
+        rustflags.extend(link_args);
     }
+    config.push(format!("target.xtensa-esp8266-none-elf.rustflags=[{}]", rustflags.join(", ")));
     for p in patched {
         config.push(format!("patch.crates-io.{}.path=\"{}\"", p.name, p.dir.display()));
         // path crates are linted like ours; these are not ours
