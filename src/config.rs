@@ -368,6 +368,7 @@ pub mod arena {
 
 pub mod estimator;
 pub mod locate;
+pub mod replay;
 pub mod sim;
 pub mod teleop;
 

@@ -14,6 +14,12 @@ pub const TOLERANCE_MM: f64 = 12.0;
 /// axis: the fix is ambiguous (reported as such), mm. Two tolerances
 /// and a grid step over the span of one point's neighbourhood.
 pub const AMBIGUOUS_SPAN_MM: i32 = 60;
+/// A consistent point within this of a cluster's bounding box joins it,
+/// mm (`model::locate::clusters`): a place's points lie on the grid's
+/// step, and a hole of a point or two (a reading at the edge of the
+/// tolerance) must not split one place in two. Clusters that together
+/// span no more than `AMBIGUOUS_SPAN_MM` are one place anyway.
+pub const CLUSTER_GAP_MM: i32 = 3 * GRID_MM;
 /// A view taken after turns in place explains its readings within
 /// this more, mm: a real turn pivots about a point behind the axle
 /// (`sim::PIVOT_BEHIND_AXLE_MM`, 10 mm, spread 5 mm), which moves the
