@@ -108,7 +108,8 @@ fn the_robot_finds_itself_at_power_up_from_random_starts() {
 /// Issue #29's bar in the hard world: right >= 98 %, wrong and not flagged
 /// <= 0.2 %. Not met by today's search (see tests/locate.rs's hard-world
 /// test for why); measured: `HARD_POWER_UP`. Asserted: no worse than
-/// that; the bar is printed, advisory. Ignored for its time:
+/// that; the bar is printed, advisory. Ignored for its time (35 s in
+/// release, minutes in the test profile):
 /// `cargo test --release --test localize -- --ignored --nocapture`.
 #[test]
 #[ignore = "minutes: the hard world's failing searches try every heading; prints issue #29's figures"]
@@ -126,8 +127,10 @@ fn the_robot_finds_itself_in_the_hard_world() {
 }
 
 /// Measured in the hard world, 1,000 power-ups: (right, wrong and not
-/// flagged).
-const HARD_POWER_UP: (usize, usize) = (0, 1_000);
+/// flagged). Also: none reported ambiguous, 198 failed (nothing fits, or
+/// out of time), 670 certain enough for goto a second later; time median
+/// 8.4 s, 95th percentile 60.1 s (the time limit). 35 s in release.
+const HARD_POWER_UP: (usize, usize) = (43, 759);
 
 /// After the fix the estimator tracks: a `goto` from the located pose gets
 /// where it was sent (on the truth), and `reset` finds the robot again
