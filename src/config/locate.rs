@@ -78,7 +78,7 @@ pub const SETTLE_MS: u32 = 100;
 /// (the body against a wall): the next turns go the other way.
 pub const BLOCKED_TURN_DEG: i32 = 20;
 /// Grid columns searched per loop tick (a column is 99 points of the
-/// team's box): two take up to 267,000 lx106 instructions (the worst
+/// team's box): two take up to 275,000 lx106 instructions (the worst
 /// slice of the search in lx106/BENCHMARKS.md), a third of the 10 ms
 /// tick at 80 MHz and one instruction a cycle (half at 1.5 cycles),
 /// which leaves the tick's own work room; a pass over the box takes 77
