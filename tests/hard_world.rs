@@ -15,8 +15,9 @@
 //! and 3), and prints its figures with
 //! `cargo test --release --test hard_world -- --ignored --nocapture`.
 //!
-//! Measured (lab world): see `lab_world_laps_keep_their_figures`; hard
-//! world with today's estimator: see the README's simulator figures.
+//! Measured (lab world): see `lab_world_laps_keep_their_figures`; the hard
+//! world with today's estimator: docs/simulator.md (median rms 80.7 mm,
+//! 2 runs never located, 16 with collisions, all 20 break the invariants).
 
 use paperbot::config;
 use paperbot::control::TICK_US;
