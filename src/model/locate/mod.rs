@@ -42,7 +42,7 @@
 //!
 //! # Cost
 //! Two [`Beam`]s per grid point and view: 153 x 99 points in the team's box
-//! at 5 mm, about 17.5 million lx106 instructions for one view (0.22 s at 80
+//! at 5 mm, about 17.7 million lx106 instructions for one view (0.22 s at 80
 //! MHz, measured by the lx106 benchmarks); a later view is tried only where
 //! the earlier ones fit, and a failed search is repeated at other headings.
 //! The loops are bounded by [`MAX_STEPS`] per axis, [`MAX_VIEWS`] and the
