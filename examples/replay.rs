@@ -13,9 +13,13 @@
 //! to stdout and the estimated path as SVG, with each lidar reading drawn
 //! from the lidar to where its beam ended (the model's distance along the
 //! beam from the estimated pose): blue the front lidar, green the right. The
-//! options take the same syntax as `simulate`'s.
+//! options take the same syntax as `simulate`'s. Its closing lines say how
+//! the estimate agrees with the readings (`paperbot::host::replay_stats`):
+//! each lidar's share of readings accepted and mean normalised innovation,
+//! and `LOST` when the estimator refused most of them or they disagree with
+//! it far beyond their noise.
 
-use paperbot::host::args;
+use paperbot::host::{args, replay_stats};
 use paperbot::math::{Angle, Coord};
 use paperbot::model::estimator::replay;
 use paperbot::model::measurement::Arena;
@@ -84,7 +88,11 @@ fn run(a: Args) -> Result<(), String> {
                 fix.sigma_x.to_mm_f64(),
                 fix.sigma_y.to_mm_f64(),
                 fix.points,
-                if fix.ambiguous { ", AMBIGUOUS: the readings fit places far apart" } else { "" }
+                match (fix.ambiguous, fix.clusters().len()) {
+                    (false, _) => String::new(),
+                    (true, 1) => ", AMBIGUOUS: the readings fit a stretch of the box".into(),
+                    (true, n) => format!(", AMBIGUOUS: the readings fit {n} places far apart; the heaviest taken"),
+                }
             );
             replay::Start::Fix(fix)
         }
@@ -96,7 +104,9 @@ fn run(a: Args) -> Result<(), String> {
         .map(|e| PoseF64::new(e.pose.x.to_mm_f64(), e.pose.y.to_mm_f64(), e.pose.theta.to_radians_f64()))
         .collect();
     let seconds = f64::from(samples.last().map_or(0, |s| s.t_ms).saturating_sub(samples[0].t_ms)) / 1000.0;
-    let title = format!("paperbot replay of {}: {} rows, {seconds:.1} s", a.log, samples.len());
+    // the log by its file name: the picture does not carry the path it was made on
+    let name = std::path::Path::new(&a.log).file_name().map_or(a.log.clone(), |n| n.to_string_lossy().into_owned());
+    let title = format!("paperbot replay of {name}: {} rows, {seconds:.1} s", samples.len());
     let track =
         Track { label: "firmware estimate from the recorded readings", color: "#d62728", dashed: false, poses: &poses };
     let rays = lidar_rays(&samples, &estimates);
@@ -113,6 +123,23 @@ fn run(a: Args) -> Result<(), String> {
         sensor("compass", &stats.compass),
         a.out
     );
+    let agreement = replay_stats::agreement(&samples, &estimates, &stats, &arena);
+    let lidar = |name: &str, l: &replay_stats::LidarAgreement| {
+        let share = if l.readings == 0 { 100.0 } else { 100.0 * f64::from(l.accepted) / f64::from(l.readings) };
+        format!(
+            "{name} {:.0} % of {} usable readings accepted, mean normalised innovation {:.1} (over {})",
+            share, l.readings, l.mean_normalised, l.innovations
+        )
+    };
+    eprintln!("replay: {}; {}", lidar("front lidar", &agreement.front), lidar("right lidar", &agreement.right));
+    if agreement.lost() {
+        eprintln!(
+            "replay: LOST: the estimate refused {:.0} % of its usable lidar readings, which disagree with it by {:.1} \
+             sigmas on average: it does not know where it is",
+            100.0 * (1.0 - agreement.accepted_share()),
+            agreement.mean_normalised()
+        );
+    }
     Ok(())
 }
 

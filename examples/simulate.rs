@@ -12,11 +12,13 @@
 //!   --seed N           noise seed (default 1)
 //!   --no-noise         exact run: no motion, lidar or compass noise
 //!   --kinematics K     rigid (default) or report (the report's turn equations)
-//!   --ideal            turn the realistic effects below off but the cone (rigid turns, ...)
+//!   --realism W        the world: lab (default: the lab's beliefs), hard (what real drives meet,
+//!                      drawn per seed: issue #29) or ideal (the exact robot); the options below adjust it
+//!   --ideal            --realism ideal: the effects below off but the cone (rigid turns, ...)
 //!   --body B           whole (default: lidars and skid kept in the box too) or wheels
 //!   --speed-spread F   trial-to-trial speed spread, one sigma, all motions (default: the lab's per motion)
 //!   --pivot MM,SD      turns pivot MM behind the axle, SD from turn to turn (default 10,5)
-//!   --cone DEG         lidar cone, full angle (default 25; 0: a thin ray)
+//!   --cone DEG         lidar cone, full angle (default 25; hard 0: a thin ray)
 //!   --glancing DEG     incidence past which lidar readings start failing (default 60; 90: never)
 //!   --compass-disturbance DEG  heading error varying over the floor (default 2)
 //!   --out FILE         SVG output (default simulate.svg)
@@ -89,6 +91,10 @@ fn parse_args() -> Result<Option<Args>, String> {
                 }
             }
             "--ideal" => a.cfg.realism = Realism::IDEAL,
+            "--realism" => {
+                let w = value("--realism")?;
+                a.cfg.realism = Realism::named(&w).ok_or(format!("--realism: {w:?}, want lab, hard or ideal"))?;
+            }
             "--body" => {
                 a.cfg.realism.whole_body = match value("--body")?.as_str() {
                     "whole" => true,
@@ -135,7 +141,7 @@ fn parse_args() -> Result<Option<Args>, String> {
 
 fn usage() -> String {
     let doc = include_str!("simulate.rs");
-    doc.lines().skip(5).take(19).map(|l| l.trim_start_matches("//! ")).collect::<Vec<_>>().join("\n")
+    doc.lines().skip(5).take(21).map(|l| l.trim_start_matches("//! ")).collect::<Vec<_>>().join("\n")
 }
 
 fn main() -> ExitCode {
@@ -200,7 +206,11 @@ fn main() -> ExitCode {
     let since_fix = samples.get(located..).unwrap_or(&[]);
     let est: Vec<PoseF64> = since_fix.iter().map(|s| s.estimate).collect();
     let dead: Vec<PoseF64> = since_fix.iter().map(|s| s.dead_reckoned).collect();
-    let title = format!("paperbot simulation: {:.1} s, seed {}", args.duration_s, args.cfg.seed);
+    let world = ["ideal", "lab", "hard"]
+        .into_iter()
+        .find(|w| Realism::named(w) == Some(args.cfg.realism))
+        .unwrap_or("adjusted");
+    let title = format!("paperbot simulation: {:.1} s, seed {}, {world} world", args.duration_s, args.cfg.seed);
     let svg = render(
         &args.cfg.arena,
         &[
@@ -230,7 +240,9 @@ fn main() -> ExitCode {
         elapsed.as_secs_f64(),
         args.out
     );
-    if located > 0 {
+    if located == samples.len() {
+        eprintln!("  never located at power-up: no estimate to compare (the figures below are empty)");
+    } else if located > 0 {
         let t_s = since_fix.first().map_or(args.duration_s, |s| s.t_us as f64 * 1e-6);
         eprintln!("  located at power-up after {t_s:.2} s; the errors over the run count from there");
     }

@@ -119,7 +119,9 @@ fn last_samples(robot: &SimRobot) -> [u32; 3] {
 
 fn run(r: Run) -> Report {
     let start = std::time::Instant::now();
-    let mut robot = SimRobot::new(SimConfig { seed: r.seed, ..SimConfig::default() });
+    // `PAPERBOT_REALISM=hard` runs it in the hard world (issue #29)
+    let realism = paperbot::sim::realism::Realism::from_env_or(paperbot::sim::realism::Realism::LAB).unwrap();
+    let mut robot = SimRobot::new(SimConfig { seed: r.seed, realism, ..SimConfig::default() });
     let mut rng = Rng::new(r.seed ^ 0xFA17);
     let mut w = Watcher::default();
     let mut inj = Injected::default();

@@ -12,7 +12,10 @@
 //! About 0.4 s per simulated hour with the test profile's optimisation, so
 //! both run in `cargo test`;
 //! `cargo test --test realistic_hour -- --nocapture` prints the figures.
+//! The world is the lab's; `PAPERBOT_REALISM=hard` (or `ideal`) runs it in
+//! another (`sim::realism`; the hard world's figures: tests/hard_world.rs).
 
+use paperbot::sim::realism::Realism;
 use paperbot::sim::robot::{SimConfig, SimRobot};
 use paperbot::sim::script::{default_script, Script};
 
@@ -31,7 +34,9 @@ struct Hour {
 }
 
 fn hour(seed: u64) -> Hour {
-    let mut robot = SimRobot::new(SimConfig { seed, ..SimConfig::default() });
+    // `PAPERBOT_REALISM=hard` runs the hour in the hard world (issue #29)
+    let realism = Realism::from_env_or(Realism::LAB).unwrap();
+    let mut robot = SimRobot::new(SimConfig { seed, realism, ..SimConfig::default() });
     robot.send("rate 0");
     let located = (0..6_000).any(|_| {
         robot.tick();

@@ -86,8 +86,21 @@ fn replay_takes_simulates_syntax_and_draws_a_labelled_picture() {
     assert_eq!(text(&out.stdout).lines().count(), 2001, "header and one row per log row");
     let picture = std::fs::read_to_string(&svg).unwrap();
     std::fs::remove_file(&svg).unwrap();
-    for want in ["paperbot replay of", "arena 800.0 x 500.0 mm", "N ^", "firmware estimate", "open circle: start"] {
+    for want in [
+        "paperbot replay of replay_sample.csv:",
+        "arena 800.0 x 500.0 mm",
+        "N ^",
+        "firmware estimate",
+        "open circle: start",
+    ] {
         assert!(picture.contains(want), "no {want:?} in the SVG");
+    }
+    assert!(!picture.contains("estimator/replay_sample.csv"), "the title names the log by file name, not its path");
+    legend_fits(&picture);
+    // how the estimate agrees with its readings (issue #29)
+    let err = text(&out.stderr);
+    for want in ["front lidar", "% of", "usable readings accepted, mean normalised innovation"] {
+        assert!(err.contains(want), "no {want:?} in {err}");
     }
     // an empty log: an error, and no picture
     let log = scratch("empty.csv");
@@ -187,4 +200,24 @@ fn teleop_web_serves_sim_pty_with_its_truth_and_refuses_a_port_in_use() {
     assert!(text(&out.stderr).contains("1 pages"), "{}", text(&out.stderr));
     int(sim.id());
     sim.wait().unwrap();
+}
+
+/// Every text line of an SVG fits inside its width, at the widest the
+/// 12 px sans-serif runs (`sim::svg::CHAR_PX` a character).
+fn legend_fits(svg: &str) {
+    let attr = |tag: &str, name: &str| -> f64 {
+        let at = tag.find(&format!(" {name}=\"")).unwrap_or_else(|| panic!("no {name} in {tag}")) + name.len() + 3;
+        tag[at..].split('"').next().unwrap().parse().unwrap()
+    };
+    let width = attr(svg.lines().next().unwrap(), "width");
+    let mut texts = 0;
+    for part in svg.split("<text").skip(1) {
+        let (tag, rest) = part.split_once('>').unwrap();
+        let content =
+            rest.split("</text>").next().unwrap().replace("&amp;", "&").replace("&lt;", "<").replace("&gt;", ">");
+        let end = attr(tag, "x") + paperbot::sim::svg::CHAR_PX * content.chars().count() as f64;
+        assert!(end <= width, "{content:?} runs to {end:.0} px, past the picture's {width} px");
+        texts += 1;
+    }
+    assert!(texts >= 4, "{texts} texts");
 }

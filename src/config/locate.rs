@@ -14,6 +14,12 @@ pub const TOLERANCE_MM: f64 = 12.0;
 /// axis: the fix is ambiguous (reported as such), mm. Two tolerances
 /// and a grid step over the span of one point's neighbourhood.
 pub const AMBIGUOUS_SPAN_MM: i32 = 60;
+/// A consistent point within this of a cluster's bounding box joins it,
+/// mm (`model::locate::clusters`): a place's points lie on the grid's
+/// step, and a hole of a point or two (a reading at the edge of the
+/// tolerance) must not split one place in two. Clusters that together
+/// span no more than `AMBIGUOUS_SPAN_MM` are one place anyway.
+pub const CLUSTER_GAP_MM: i32 = 3 * GRID_MM;
 /// A view taken after turns in place explains its readings within
 /// this more, mm: a real turn pivots about a point behind the axle
 /// (`sim::PIVOT_BEHIND_AXLE_MM`, 10 mm, spread 5 mm), which moves the
@@ -72,7 +78,7 @@ pub const SETTLE_MS: u32 = 100;
 /// (the body against a wall): the next turns go the other way.
 pub const BLOCKED_TURN_DEG: i32 = 20;
 /// Grid columns searched per loop tick (a column is 99 points of the
-/// team's box): two take up to 267,000 lx106 instructions (the worst
+/// team's box): two take up to 275,000 lx106 instructions (the worst
 /// slice of the search in lx106/BENCHMARKS.md), a third of the 10 ms
 /// tick at 80 MHz and one instruction a cycle (half at 1.5 cycles),
 /// which leaves the tick's own work room; a pass over the box takes 77

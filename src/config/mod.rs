@@ -38,6 +38,9 @@ pub mod timing;
 // the estimator
 pub mod estimator;
 
+// host only: replay's verdict on a drive
+pub mod replay;
+
 // host only: the simulator and the teleop tool
 pub mod sim;
 pub mod teleop;

@@ -25,6 +25,7 @@ use std::string::String;
 use std::vec::Vec;
 
 use super::body::{advance, MotionF64, PoseF64};
+use super::drawn::Drawn;
 use super::noise::Rng;
 use super::robot::{body_fits, set_truth, SimConfig};
 use super::script::Script;
@@ -150,8 +151,10 @@ pub struct EmulatedRobot {
     pub wire: Wire,
     truth: PoseF64,
     rng: Rng,
-    /// The compass disturbance's phase (per seed, as in the host simulator).
-    disturbance_phase: f64,
+    /// What the run drew once (as in the host simulator; the hard world's
+    /// motion effects are the host simulator's only, its sensor effects
+    /// apply here too).
+    drawn: Drawn,
     next_step_ns: u64,
     pins: u32,
     /// Whether `pins` holds levels the board reported.
@@ -191,7 +194,8 @@ impl EmulatedRobot {
         sensors.right.borrow_mut().set_xshut(false);
         let mut rng = Rng::new(cfg.seed);
         let disturbance_phase = rng.range_f64(0.0, core::f64::consts::TAU);
-        set_truth(&sensors, &cfg, &cfg.start, &mut rng, disturbance_phase);
+        let drawn = Drawn::draw(cfg.seed, &cfg.realism, disturbance_phase);
+        set_truth(&sensors, &cfg, &cfg.start, &mut rng, &drawn);
         let s = cfg.start;
         let preamble = if cfg.locate_at_power_up {
             String::new()
@@ -204,7 +208,7 @@ impl EmulatedRobot {
             wire,
             truth: cfg.start,
             rng,
-            disturbance_phase,
+            drawn,
             next_step_ns: NS_PER_TICK,
             pins: 0,
             pins_known: false,
@@ -300,7 +304,7 @@ impl EmulatedRobot {
             self.collisions += 1;
         }
         self.truth_log.push((t, self.truth));
-        set_truth(&self.sensors, &self.cfg, &self.truth, &mut self.rng, self.disturbance_phase);
+        set_truth(&self.sensors, &self.cfg, &self.truth, &mut self.rng, &self.drawn);
     }
 
     fn pins_changed(&mut self, t: u64, levels: u32) {

@@ -7,6 +7,7 @@
 pub mod arena;
 pub mod body;
 pub mod bus;
+pub mod drawn;
 pub mod link;
 pub mod mpu9250;
 pub mod noise;

@@ -16,6 +16,22 @@
 //!   a reading is lost (no target) or spurious (a short or long echo);
 //! - compass disturbance: the field is bent by what is under and around the
 //!   box, a heading error that varies smoothly over the floor.
+//!
+//! Three worlds ([`Realism::named`], `simulate --realism`):
+//! - [`Realism::IDEAL`] (`--ideal`): the exact robot, the model's own
+//!   world (rigid turns about the axle, the lines' speeds, the sensor's
+//!   cone, an undisturbed compass): what the estimator must track exactly;
+//! - [`Realism::LAB`] (`lab`, today's default): the lab's beliefs, each
+//!   effect at what the lab measured or assumed (above);
+//! - [`Realism::HARD`] (`hard`): what real drives meet and the lab did not
+//!   measure (issue #29), each run drawing its own robot from its seed
+//!   ([`super::drawn::Drawn`]): each turn direction's rate off the lab's
+//!   line by a factor in 0.6 to 1.8, drifting slowly; the straight speed
+//!   off by up to 15 %; the pivot 60 +- 20 mm behind the axle; a compass
+//!   bias over the floor up to 12 degrees, 20 near the walls; the lidars a
+//!   thin beam whose noise grows with incidence, 5 % spurious readings and
+//!   mixed returns where the beam's footprint spans a corner. The default
+//!   stays [`Realism::LAB`] until the estimator copes with this world.
 
 use super::arena::Arena;
 use super::body::{wrap_pi, MotionF64};
@@ -47,6 +63,32 @@ pub struct Realism {
     /// Compass disturbance: amplitude of the heading error over the
     /// floor, degrees.
     pub compass_disturbance_deg: f64,
+    /// Each turn direction's rate factor, drawn per run uniformly in
+    /// (lo, hi); (1, 1): the lab's lines.
+    pub turn_scale: (f64, f64),
+    /// That factor's slow drift, fraction of itself (0: none) ...
+    pub turn_drift: f64,
+    /// ... over this period, s.
+    pub turn_drift_period_s: f64,
+    /// Straight speed factor drawn per run uniformly within this of 1.
+    pub speed_scale: f64,
+    /// The pivot's mean moves per run uniformly within this, mm.
+    pub pivot_run_mm: f64,
+    /// The compass's heading error reaches this near the walls, degrees
+    /// (no more than `compass_disturbance_deg`: no wall excursion) ...
+    pub compass_wall_deg: f64,
+    /// ... falling off by e over this distance from the wall, mm ...
+    pub compass_wall_decay_mm: f64,
+    /// ... in a pattern of this wavelength along the walls, mm.
+    pub compass_wall_wavelength_mm: f64,
+    /// Lidar noise growing with incidence: one sigma of this fraction of
+    /// the range times tan(incidence) (0: none).
+    pub lidar_incidence_noise: f64,
+    /// Share of all lidar readings that are spurious echoes (0 to 1).
+    pub spurious_rate: f64,
+    /// A beam whose footprint, this half-angle about its axis (degrees),
+    /// spans two walls returns a mix of their ranges (0: none).
+    pub corner_mix_half_deg: f64,
 }
 
 impl Realism {
@@ -62,6 +104,17 @@ impl Realism {
         glancing_deg: 90.0,
         spurious_share: 0.0,
         compass_disturbance_deg: 0.0,
+        turn_scale: (1.0, 1.0),
+        turn_drift: 0.0,
+        turn_drift_period_s: cfg::HARD_TURN_DRIFT_PERIOD_S,
+        speed_scale: 0.0,
+        pivot_run_mm: 0.0,
+        compass_wall_deg: 0.0,
+        compass_wall_decay_mm: cfg::HARD_COMPASS_WALL_DECAY_MM,
+        compass_wall_wavelength_mm: cfg::HARD_COMPASS_WALL_WAVELENGTH_MM,
+        lidar_incidence_noise: 0.0,
+        spurious_rate: 0.0,
+        corner_mix_half_deg: 0.0,
     };
     /// The lab's robot ([`crate::config::sim`]).
     pub const LAB: Realism = Realism {
@@ -73,7 +126,65 @@ impl Realism {
         glancing_deg: cfg::GLANCING_DEG,
         spurious_share: cfg::SPURIOUS_SHARE,
         compass_disturbance_deg: cfg::COMPASS_DISTURBANCE_DEG,
+        turn_scale: (1.0, 1.0),
+        turn_drift: 0.0,
+        turn_drift_period_s: cfg::HARD_TURN_DRIFT_PERIOD_S,
+        speed_scale: 0.0,
+        pivot_run_mm: 0.0,
+        compass_wall_deg: 0.0,
+        compass_wall_decay_mm: cfg::HARD_COMPASS_WALL_DECAY_MM,
+        compass_wall_wavelength_mm: cfg::HARD_COMPASS_WALL_WAVELENGTH_MM,
+        lidar_incidence_noise: 0.0,
+        spurious_rate: 0.0,
+        corner_mix_half_deg: 0.0,
     };
+    /// What real drives meet (issue #29; [`crate::config::sim`]'s `HARD_*`):
+    /// the lab's effects, then each turn direction's rate, the speed, the
+    /// pivot and the compass's bias drawn per run far from the lab's
+    /// beliefs, and the lidars a thin beam with noise growing with
+    /// incidence, spurious readings and mixed returns near corners.
+    pub const HARD: Realism = Realism {
+        whole_body: true,
+        speed_spread: cfg::SPEED_SPREAD,
+        pivot_behind_mm: cfg::HARD_PIVOT_BEHIND_AXLE_MM,
+        pivot_spread_mm: cfg::PIVOT_SPREAD_MM,
+        cone_deg: 0.0,
+        glancing_deg: cfg::GLANCING_DEG,
+        spurious_share: cfg::SPURIOUS_SHARE,
+        compass_disturbance_deg: cfg::HARD_COMPASS_FLOOR_DEG,
+        turn_scale: cfg::HARD_TURN_SCALE,
+        turn_drift: cfg::HARD_TURN_DRIFT,
+        turn_drift_period_s: cfg::HARD_TURN_DRIFT_PERIOD_S,
+        speed_scale: cfg::HARD_SPEED_SCALE,
+        pivot_run_mm: cfg::HARD_PIVOT_RUN_MM,
+        compass_wall_deg: cfg::HARD_COMPASS_WALL_DEG,
+        compass_wall_decay_mm: cfg::HARD_COMPASS_WALL_DECAY_MM,
+        compass_wall_wavelength_mm: cfg::HARD_COMPASS_WALL_WAVELENGTH_MM,
+        lidar_incidence_noise: cfg::HARD_LIDAR_INCIDENCE_NOISE,
+        spurious_rate: cfg::HARD_SPURIOUS_RATE,
+        corner_mix_half_deg: cfg::HARD_CORNER_MIX_HALF_DEG,
+    };
+
+    /// The world by name: `ideal`, `lab` or `hard`.
+    pub fn named(name: &str) -> Option<Realism> {
+        match name {
+            "ideal" => Some(Realism::IDEAL),
+            "lab" => Some(Realism::LAB),
+            "hard" => Some(Realism::HARD),
+            _ => None,
+        }
+    }
+
+    /// The long-run tests' world: the environment's `PAPERBOT_REALISM`
+    /// (`ideal`, `lab`, `hard`), else `default` (e.g.
+    /// `PAPERBOT_REALISM=hard cargo test --test realistic_hour`); an
+    /// unknown name is an error (a run that asked for a world must get it).
+    pub fn from_env_or(default: Realism) -> Result<Realism, std::string::String> {
+        match std::env::var("PAPERBOT_REALISM") {
+            Ok(name) => Realism::named(&name).ok_or(std::format!("PAPERBOT_REALISM={name:?}: want ideal, lab or hard")),
+            Err(_) => Ok(default),
+        }
+    }
 }
 
 impl Default for Realism {
@@ -186,6 +297,54 @@ pub fn glancing_failure(incidence: f64, r: &Realism, rng: &mut Rng) -> Option<Op
     } else {
         Some(None)
     }
+}
+
+/// The hard world's effects on a reading of range `t` (mm, from the lidar
+/// at `ray`'s (x, y) looking along its direction) at `incidence` (radians), before the
+/// glancing failures and the sensor's noise: where the beam's footprint
+/// ([`Realism::corner_mix_half_deg`] about its axis) spans two walls, a
+/// mix of the ranges it spans (its axis's and its edges'), drawn uniformly
+/// between the nearest and the farthest; then noise growing
+/// with incidence ([`Realism::lidar_incidence_noise`]). Draws nothing
+/// with both off (the lab's and the ideal world's streams stay).
+pub fn beam_effects(arena: &Arena, ray: (f64, f64, f64), t: f64, incidence: f64, r: &Realism, rng: &mut Rng) -> f64 {
+    let (x, y, dir) = ray;
+    let mut t = t;
+    if r.corner_mix_half_deg > 0.0 {
+        let half = r.corner_mix_half_deg.to_radians();
+        if let (Some((a, wa)), Some((b, wb))) = (wall_hit(arena, x, y, dir - half), wall_hit(arena, x, y, dir + half)) {
+            if wa != wb {
+                let (near, far) = (t.min(a).min(b), t.max(a).max(b));
+                t = rng.range_f64(near, far);
+            }
+        }
+    }
+    if r.lidar_incidence_noise > 0.0 {
+        let slope = incidence.min(80f64.to_radians()).tan();
+        t += rng.gauss(r.lidar_incidence_noise * t * slope);
+    }
+    t.max(0.0)
+}
+
+/// Whether a reading is a spurious echo regardless of incidence
+/// ([`Realism::spurious_rate`]): `Some(factor)` times the true range (0.3
+/// to 1.5, as a glancing failure's echo). Draws nothing with the rate 0.
+pub fn spurious(r: &Realism, rng: &mut Rng) -> Option<f64> {
+    if r.spurious_rate > 0.0 && rng.chance(r.spurious_rate) {
+        Some(rng.range_f64(0.3, 1.5))
+    } else {
+        None
+    }
+}
+
+/// The thin ray's length from (x, y) along `dir` and which wall it ends on
+/// (0: x = 0, 1: x = length, 2: y = 0, 3: y = width).
+fn wall_hit(arena: &Arena, x: f64, y: f64, dir: f64) -> Option<(f64, u8)> {
+    let t = arena.ray_cast(x, y, dir)?;
+    let (px, py) = (x + t * dir.cos(), y + t * dir.sin());
+    let gaps = [px.abs(), (px - arena.length_x_mm()).abs(), py.abs(), (py - arena.width_y_mm()).abs()];
+    let wall = (0..4u8).min_by(|&a, &b| gaps[usize::from(a)].total_cmp(&gaps[usize::from(b)]))?;
+    Some((t, wall))
 }
 
 /// The compass's heading error at (x, y) mm, radians: a smooth pattern over

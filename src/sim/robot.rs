@@ -28,8 +28,9 @@ use std::vec::Vec;
 
 use super::arena::Arena;
 use super::body::{advance, Kinematics, MotionF64, PoseF64};
+use super::drawn::Drawn;
 use super::noise::Rng;
-use super::realism::{compass_disturbance, glancing_failure, lidar_range, Realism, Trial};
+use super::realism::{beam_effects, glancing_failure, lidar_range, spurious, Realism, Trial};
 use super::script::Script;
 use super::sensors::{SimCompass, SimLidar, SimSensors};
 use crate::config;
@@ -181,8 +182,9 @@ pub struct SimRobot {
     collisions: u32,
     /// The running motion's draw of speed factor and pivot.
     trial: Trial,
-    /// The compass disturbance's phase (per seed).
-    disturbance_phase: f64,
+    /// What the run drew once: the hard world's robot, the compass's
+    /// pattern over the floor.
+    drawn: Drawn,
 }
 
 impl SimRobot {
@@ -191,8 +193,9 @@ impl SimRobot {
         let (mut front, mut right, mut compass) = sensors.drivers();
         let mut rng = Rng::new(cfg.seed);
         let disturbance_phase = rng.range_f64(0.0, core::f64::consts::TAU);
+        let drawn = Drawn::draw(cfg.seed, &cfg.realism, disturbance_phase);
         // the chips see the start pose during bring-up
-        set_truth(&sensors, &cfg, &cfg.start, &mut rng, disturbance_phase);
+        set_truth(&sensors, &cfg, &cfg.start, &mut rng, &drawn);
         // bring-up results show in the loop's health: a chip that failed
         // here fails its first poll and is re-initialised by the loop
         let _ = crate::driver::lidar::bring_up(&mut front, &mut right);
@@ -217,7 +220,7 @@ impl SimRobot {
             next_tick_ns,
             collisions: 0,
             trial: Trial::NONE,
-            disturbance_phase,
+            drawn,
         }
     }
 
@@ -251,7 +254,7 @@ impl SimRobot {
         // clock past the schedule: then this tick is late, as on the robot
         let now_ns = clock.now_ns().max(self.next_tick_ns);
         clock.advance_ns(now_ns - clock.now_ns());
-        set_truth(&self.sensors, &self.cfg, &self.truth, &mut self.rng, self.disturbance_phase);
+        set_truth(&self.sensors, &self.cfg, &self.truth, &mut self.rng, &self.drawn);
         // the loop's wrapping microsecond counter
         self.ctl.tick((now_ns / 1_000) as u32, &mut self.out);
         self.next_tick_ns = now_ns + u64::from(TICK_US) * 1_000;
@@ -262,14 +265,22 @@ impl SimRobot {
         let motion = MotionF64::from_motion(motion);
         self.trial = self.trial.for_motion(motion, &self.cfg.realism, &mut self.rng);
         let k = self.trial.speed_factor;
+        let t_s = now_ns as f64 * 1e-9;
+        let (drawn, realism) = (&self.drawn, &self.cfg.realism);
         let noisy = match motion {
             MotionF64::Stop => MotionF64::Stop,
-            MotionF64::Straight(v) => MotionF64::Straight(v * k * (1.0 + self.rng.gauss(self.cfg.noise.speed))),
-            MotionF64::Turn(w) => MotionF64::Turn(w * k * (1.0 + self.rng.gauss(self.cfg.noise.turn))),
+            MotionF64::Straight(v) => {
+                MotionF64::Straight(v * k * drawn.speed_scale * (1.0 + self.rng.gauss(self.cfg.noise.speed)))
+            }
+            MotionF64::Turn(w) => {
+                let scale = drawn.turn_factor(w >= 0.0, t_s, realism);
+                MotionF64::Turn(w * k * scale * (1.0 + self.rng.gauss(self.cfg.noise.turn)))
+            }
         };
         // a turn pivots `pivot_behind_mm` behind the axle: the reference
         // point circles it at D plus that
-        let d = config::geometry::ROTATION_TO_REFERENCE.to_mm_f64() + self.trial.pivot_behind_mm;
+        let d =
+            config::geometry::ROTATION_TO_REFERENCE.to_mm_f64() + self.trial.pivot_behind_mm + drawn.pivot_offset_mm;
         let next = advance(&self.truth, noisy, dt_s, self.cfg.kinematics, d);
         if self.fits(&next) {
             self.truth = next;
@@ -345,6 +356,10 @@ impl SimRobot {
     pub fn collisions(&self) -> u32 {
         self.collisions
     }
+    /// What the run drew once from its seed (the hard world's robot).
+    pub fn drawn(&self) -> &Drawn {
+        &self.drawn
+    }
 }
 
 /// True when the nose (reference point) and both wheels are inside the
@@ -369,23 +384,27 @@ pub fn body_fits(a: &Arena, realism: &Realism, p: &PoseF64) -> bool {
         && lidar_in(&config::geometry::RIGHT_LIDAR)
 }
 
-/// What a lidar at `mount` on the body at `p` measures before its noise:
-/// the distance from the reference point along the beam (the lidar
-/// model's output) to the nearest wall in its cone, with a glancing
-/// reading's failure drawn from `rng`; `None` for "no target".
+/// What a lidar at `mount` on the body at `p` measures before the
+/// sensor's own noise: the distance from the reference point along the
+/// beam (the lidar model's output) to the nearest wall in its cone (a thin
+/// ray with the cone off), with the hard world's mixed returns and
+/// incidence noise ([`beam_effects`]), a glancing reading's failure and a
+/// spurious echo drawn from `rng`; `None` for "no target".
 pub fn lidar_truth(arena: &Arena, realism: &Realism, p: &PoseF64, mount: &LidarMount, rng: &mut Rng) -> Option<f64> {
     let (x, y, dir) = p.lidar_ray(mount);
     let (t, incidence) = lidar_range(arena, x, y, dir, realism)?;
+    let t = beam_effects(arena, (x, y, dir), t, incidence, realism, rng);
     let t = match glancing_failure(incidence, realism, rng) {
         None => t,
         Some(None) => return None,
         Some(Some(factor)) => t * factor,
     };
+    let t = spurious(realism, rng).map_or(t, |factor| t * factor);
     Some(t + PoseF64::along_beam_mm(mount))
 }
 
 /// Sets the fake chips' truth for the body at `p`.
-pub fn set_truth(sensors: &SimSensors, cfg: &SimConfig, p: &PoseF64, rng: &mut Rng, disturbance_phase: f64) {
+pub fn set_truth(sensors: &SimSensors, cfg: &SimConfig, p: &PoseF64, rng: &mut Rng, drawn: &Drawn) {
     let no_target = crate::model::lidar::NO_TARGET_READING;
     let lidar = |mount: &LidarMount, model: &LidarModel, rng: &mut Rng| -> u16 {
         let Some(d) = lidar_truth(&cfg.arena, &cfg.realism, p, mount, rng) else { return no_target };
@@ -396,7 +415,7 @@ pub fn set_truth(sensors: &SimSensors, cfg: &SimConfig, p: &PoseF64, rng: &mut R
     let right = lidar(&config::geometry::RIGHT_LIDAR, &config::lidar::RIGHT, rng);
     sensors.front.borrow_mut().set_distance_mm(front);
     sensors.right.borrow_mut().set_distance_mm(right);
-    let disturbed = p.theta + compass_disturbance(p.x, p.y, &cfg.realism, disturbance_phase);
+    let disturbed = p.theta + drawn.compass_bias(&cfg.arena, p.x, p.y, &cfg.realism);
     sensors.mpu.borrow_mut().ak.set_field_adjusted(field_for(disturbed, cfg.noise.compass_deg, rng));
 }
 

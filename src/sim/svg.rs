@@ -19,6 +19,12 @@ pub struct Track<'a> {
 
 const MARGIN: f64 = 40.0;
 const LEGEND_ROW: f64 = 18.0;
+/// The widest a character of the 12 px sans-serif text runs, px (0.62 em:
+/// the widest common sans-serif faces' average for lower-case text with
+/// capitals and digits; a text's room is its characters times this).
+pub const CHAR_PX: f64 = 7.5;
+/// Where a legend row's text starts, right of its line sample, px.
+const LEGEND_TEXT_X: f64 = MARGIN + 38.0;
 /// Length of the heading arrow at the end of a track, px (= mm).
 const ARROW: f64 = 40.0;
 
@@ -50,7 +56,11 @@ pub fn render(arena: &Arena, tracks: &[Track<'_>], title: &str) -> String {
 pub fn render_with_rays(arena: &Arena, tracks: &[Track<'_>], rays: &[Ray<'_>], title: &str) -> String {
     let rows = tracks.len() + 1 + usize::from(!rays.is_empty());
     let legend_h = LEGEND_ROW * rows as f64;
-    let w = arena.width_y_mm() + 2.0 * MARGIN;
+    // wide enough for the box and for every line of text (title, legend)
+    let room = |x: f64, text: &str| x + CHAR_PX * text.chars().count() as f64 + MARGIN;
+    let texts = tracks.iter().map(|t| room(LEGEND_TEXT_X, t.label));
+    let fixed = [title, RAYS_LEGEND, ENDS_LEGEND, &arena_line(arena)].map(|t| room(MARGIN, t));
+    let w = texts.chain(fixed).fold(arena.width_y_mm() + 2.0 * MARGIN, f64::max);
     let h = arena.length_x_mm() + 2.0 * MARGIN + legend_h;
     // (x north, y east) -> (svg x right, svg y down)
     let px = |p: &PoseF64| (MARGIN + p.y, MARGIN + arena.length_x_mm() - p.x);
@@ -67,13 +77,7 @@ pub fn render_with_rays(arena: &Arena, tracks: &[Track<'_>], rays: &[Ray<'_>], t
         arena.length_x_mm()
     );
     let _ = writeln!(s, r#"<text x="{MARGIN}" y="{:.1}">{}</text>"#, MARGIN - 22.0, escape(title));
-    let _ = writeln!(
-        s,
-        r#"<text x="{MARGIN}" y="{:.1}">N ^  arena {:.1} x {:.1} mm (x north, y east), 1 px = 1 mm</text>"#,
-        MARGIN - 6.0,
-        arena.length_x_mm(),
-        arena.width_y_mm()
-    );
+    let _ = writeln!(s, r#"<text x="{MARGIN}" y="{:.1}">{}</text>"#, MARGIN - 6.0, arena_line(arena));
     for r in rays {
         let (x1, y1) = px(&PoseF64::new(r.from.0, r.from.1, 0.0));
         let (x2, y2) = px(&PoseF64::new(r.to.0, r.to.1, 0.0));
@@ -121,22 +125,26 @@ pub fn render_with_rays(arena: &Arena, tracks: &[Track<'_>], rays: &[Ray<'_>], t
             MARGIN + 30.0,
             ly - 4.0,
             t.color,
-            MARGIN + 38.0,
+            LEGEND_TEXT_X,
             ly,
             escape(t.label)
         );
         ly += LEGEND_ROW;
     }
     if !rays.is_empty() {
-        let _ = writeln!(
-            s,
-            r#"<text x="{MARGIN}" y="{ly:.1}">thin lines and dots: each lidar reading, from the lidar to where its beam ended (a colour per lidar)</text>"#
-        );
+        let _ = writeln!(s, r#"<text x="{MARGIN}" y="{ly:.1}">{RAYS_LEGEND}</text>"#);
         ly += LEGEND_ROW;
     }
-    let _ =
-        writeln!(s, r#"<text x="{MARGIN}" y="{ly:.1}">open circle: start; filled: end; line: heading</text></svg>"#);
+    let _ = writeln!(s, r#"<text x="{MARGIN}" y="{ly:.1}">{ENDS_LEGEND}</text></svg>"#);
     s
+}
+
+const RAYS_LEGEND: &str =
+    "thin lines and dots: each lidar reading, from the lidar to where its beam ended (a colour per lidar)";
+const ENDS_LEGEND: &str = "open circle: start; filled: end; line: heading";
+
+fn arena_line(arena: &Arena) -> String {
+    std::format!("N ^  arena {:.1} x {:.1} mm (x north, y east), 1 px = 1 mm", arena.length_x_mm(), arena.width_y_mm())
 }
 
 fn escape(t: &str) -> String {

@@ -12,16 +12,23 @@
 //! every given reading is within [`cfg::TOLERANCE_MM`] of that (as
 //! `|normal_miss| <= tol cone_normal`: no division). A beam that would meet
 //! its wall past [`cfg::GLANCING_DEG`] at a point says nothing about that
-//! point (glancing readings fail or lie). The consistent points'
-//! mean is the position; their spread, with the grid's own and the lidars'
-//! noise, its uncertainty ([`Fix`]).
+//! point (glancing readings fail or lie); a point must explain at least one
+//! reading (one whose readings all say nothing is no fit). The consistent
+//! points gather into clusters, places apart that the readings fit
+//! ([`clusters`]): each cluster's mean is a position, its spread, with the
+//! grid's own and the lidars' noise, its uncertainty, its share of the
+//! points its weight ([`Cluster`]). The fix ([`Fix`]) is the heaviest
+//! cluster, never the mean of places apart.
 //!
 //! Two ranges and a heading fix a position when the beams meet walls of
 //! both axes; when they meet walls of one axis (near a corner, at about 45
 //! degrees) the other coordinate is free, and the consistent points spread
-//! along it, or they fall into separate groups. Either way the fix is
-//! [`Fix::ambiguous`] (spread past [`cfg::AMBIGUOUS_SPAN_MM`]) and its
-//! uncertainty says how much: reported, not guessed silently.
+//! along it, or they fall into separate clusters. Either way the fix is
+//! [`Fix::ambiguous`] (a cluster spread past [`cfg::AMBIGUOUS_SPAN_MM`], or
+//! several) and its uncertainty, the spread of all the points, says how
+//! much: reported, not guessed silently. [`Fix::clusters`] lists the places
+//! (up to [`MAX_CLUSTERS`], weighted), for a tracker that keeps several
+//! hypotheses.
 //!
 //! # Several views
 //! A turn in place keeps the axle and swings the reference point D ahead of
@@ -35,17 +42,22 @@
 //!
 //! # Cost
 //! Two [`Beam`]s per grid point and view: 153 x 99 points in the team's box
-//! at 5 mm, about 17.5 million lx106 instructions for one view (0.22 s at 80
+//! at 5 mm, about 17.7 million lx106 instructions for one view (0.22 s at 80
 //! MHz, measured by the lx106 benchmarks); a later view is tried only where
 //! the earlier ones fit, and a failed search is repeated at other headings.
 //! The loops are bounded by [`MAX_STEPS`] per axis, [`MAX_VIEWS`] and the
 //! headings tried. [`Search`] does the same work a few grid columns at a
 //! time, so the robot's loop spreads it over its ticks.
 
+pub mod clusters;
+
+pub use clusters::{Cluster, MAX_CLUSTERS};
+
 use crate::config::locate as cfg;
-use crate::math::{isqrt64, mul_q30, Angle, Coord, Length};
+use crate::math::{mul_q30, Angle, Coord, Length};
 use crate::model::measurement::{Arena, Beam, LidarId};
 use crate::model::state::Pose;
+use clusters::{Gather, Sums};
 
 /// `cos` of [`cfg::GLANCING_DEG`], Q2.30.
 const GLANCING_NORMAL: i32 =
@@ -57,17 +69,37 @@ pub const MAX_STEPS: i32 = 400;
 /// Where the search put the robot.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
 pub struct Fix {
-    /// The consistent points' mean, at the compass heading.
+    /// The heaviest cluster's mean (with one cluster, the consistent
+    /// points' mean), at the compass heading.
     pub pose: Pose,
-    /// One-sigma uncertainty per axis, mm (Q16): the consistent points'
-    /// spread, the grid's and the lidars' noise.
+    /// One-sigma uncertainty per axis, mm (Q16): all the consistent
+    /// points' spread (clusters apart included), the grid's and the
+    /// lidars' noise.
     pub sigma_x: Length,
     pub sigma_y: Length,
     /// How many grid points fit the readings.
     pub points: u32,
-    /// The points spread over more than [`cfg::AMBIGUOUS_SPAN_MM`] on an
-    /// axis: the readings do not say where along it the robot is.
+    /// The readings fit several places apart, or one spread over more than
+    /// [`cfg::AMBIGUOUS_SPAN_MM`] on an axis: they do not say which, or
+    /// where along it the robot is.
     pub ambiguous: bool,
+    /// The places, heaviest first: `clusters[..count]` ([`Fix::clusters`]).
+    cluster_slots: [Cluster; MAX_CLUSTERS],
+    count: u8,
+}
+
+impl Fix {
+    /// The places the readings fit, heaviest first (at least one, at most
+    /// [`MAX_CLUSTERS`]; lighter ones past that are left out, so the
+    /// weights may sum to less than one).
+    pub fn clusters(&self) -> &[Cluster] {
+        self.cluster_slots.get(..usize::from(self.count)).unwrap_or(&[])
+    }
+
+    /// A cluster's pose: its position at the fix's heading.
+    pub fn pose_of(&self, c: &Cluster) -> Pose {
+        Pose::new(c.x, c.y, self.pose.theta)
+    }
 }
 
 /// Why there is no fix.
@@ -135,7 +167,9 @@ pub struct Search {
     allowed: u32,
     /// The next grid column of this pass.
     column: i32,
+    /// All the consistent points, and their clusters.
     sums: Sums,
+    gather: Gather,
 }
 
 impl Search {
@@ -161,6 +195,7 @@ impl Search {
             allowed: 0,
             column: 0,
             sums: Sums::EMPTY,
+            gather: Gather::EMPTY,
         })
     }
 
@@ -178,17 +213,18 @@ impl Search {
                 return self.pass_done(&views);
             }
             self.column = self.column.saturating_add(1);
-            search_column(arena, &views, self.allowed, x, &mut self.sums);
+            search_column(arena, &views, self.allowed, x, &mut self.sums, &mut self.gather);
         }
         None
     }
 
     /// A pass is over: its fix, or the next pass.
     fn pass_done(&mut self, views: &[Option<View>; MAX_VIEWS]) -> Option<Result<Fix, LocateError>> {
-        if let Some(fix) = fix_from(&self.sums, views) {
+        self.gather.settle();
+        if let Some(fix) = fix_from(&self.sums, &self.gather, views) {
             return Some(Ok(fix));
         }
-        (self.column, self.sums) = (0, Sums::EMPTY);
+        (self.column, self.sums, self.gather) = (0, Sums::EMPTY, Gather::EMPTY);
         // one failed reading (a spurious echo) among many must not hide
         // the pose the others agree on
         if self.allowed == 0 && self.readings > cfg::MIN_READINGS_FOR_OUTLIER {
@@ -271,9 +307,10 @@ impl View {
     }
 
     /// How many of this view's readings the grid point (x, y) does not
-    /// explain (within the tolerance of the model's), or `None` when the
-    /// body does not fit in the box there.
-    fn misses(&self, arena: &Arena, x: i32, y: i32) -> Option<u32> {
+    /// explain (within the tolerance of the model's), and how many it does
+    /// (a glancing beam's reading is neither), or `None` when the body does
+    /// not fit in the box there.
+    fn misses(&self, arena: &Arena, x: i32, y: i32) -> Option<(u32, u32)> {
         let (x, y) = (x.saturating_add(self.offset.0), y.saturating_add(self.offset.1));
         let (lx, wy) = self.box_mm;
         let inside = |o: &(i32, i32)| {
@@ -286,53 +323,38 @@ impl View {
         let mut pose = self.pose;
         pose.x = Coord::from_length(Length::from_mm(x));
         pose.y = Coord::from_length(Length::from_mm(y));
+        // (missed, explained)
         let fits = |id: LidarId, z: Option<Length>| match z {
-            None => true,
+            None => (0, 0),
             Some(z) => {
                 let beam = Beam::new(arena, &pose, &id.mount());
                 // a beam this glancing may fail or lie: its reading says
                 // nothing about this point
-                !beam.square_enough(GLANCING_NORMAL)
-                    || beam.normal_miss(z).0.saturating_abs() <= mul_q30(self.tol.0, beam.cone_normal)
+                if !beam.square_enough(GLANCING_NORMAL) {
+                    (0, 0)
+                } else if beam.normal_miss(z).0.saturating_abs() <= mul_q30(self.tol.0, beam.cone_normal) {
+                    (0, 1)
+                } else {
+                    (1, 0)
+                }
             }
         };
-        Some(u32::from(!fits(LidarId::Front, self.front)) + u32::from(!fits(LidarId::Right, self.right)))
-    }
-}
-
-/// Sums over the consistent points, whole mm.
-#[derive(Clone, Copy, Debug)]
-struct Sums {
-    n: u32,
-    x: i64,
-    y: i64,
-    xx: i64,
-    yy: i64,
-    min_x: i32,
-    max_x: i32,
-    min_y: i32,
-    max_y: i32,
-}
-
-impl Sums {
-    const EMPTY: Sums =
-        Sums { n: 0, x: 0, y: 0, xx: 0, yy: 0, min_x: i32::MAX, max_x: i32::MIN, min_y: i32::MAX, max_y: i32::MIN };
-
-    fn add(&mut self, x: i32, y: i32) {
-        self.n = self.n.saturating_add(1);
-        self.x = self.x.saturating_add(i64::from(x));
-        self.y = self.y.saturating_add(i64::from(y));
-        self.xx = self.xx.saturating_add(i64::from(x) * i64::from(x));
-        self.yy = self.yy.saturating_add(i64::from(y) * i64::from(y));
-        (self.min_x, self.max_x) = (self.min_x.min(x), self.max_x.max(x));
-        (self.min_y, self.max_y) = (self.min_y.min(y), self.max_y.max(y));
+        let (front, right) = (fits(LidarId::Front, self.front), fits(LidarId::Right, self.right));
+        Some((front.0 + right.0, front.1 + right.1))
     }
 }
 
 /// One grid column (the first view's reference point at `x`): a point must
-/// fit the body in the box in every view and explain all the views'
-/// readings but `allowed`.
-fn search_column(arena: &Arena, views: &[Option<View>; MAX_VIEWS], allowed: u32, x: i32, sums: &mut Sums) {
+/// fit the body in the box in every view, explain all the views' readings
+/// but `allowed`, and explain at least one.
+fn search_column(
+    arena: &Arena,
+    views: &[Option<View>; MAX_VIEWS],
+    allowed: u32,
+    x: i32,
+    sums: &mut Sums,
+    gather: &mut Gather,
+) {
     let Some(Some(first)) = views.first() else {
         return;
     };
@@ -342,52 +364,50 @@ fn search_column(arena: &Arena, views: &[Option<View>; MAX_VIEWS], allowed: u32,
         if y > wy {
             break;
         }
-        let mut missed = Some(0u32);
+        // (missed, explained) over the views so far
+        let mut counts = Some((0u32, 0u32));
         for v in views.iter().flatten() {
-            missed = missed.zip(v.misses(arena, x, y)).map(|(a, b)| a.saturating_add(b)).filter(|&m| m <= allowed);
-            if missed.is_none() {
+            counts = counts
+                .zip(v.misses(arena, x, y))
+                .map(|((m, e), (vm, ve))| (m.saturating_add(vm), e.saturating_add(ve)))
+                .filter(|&(m, _)| m <= allowed);
+            if counts.is_none() {
                 break;
             }
         }
-        if missed.is_some() {
+        if counts.is_some_and(|(_, explained)| explained > 0) {
             sums.add(x, y);
+            gather.add(x, y);
         }
     }
 }
 
-/// The fix from a pass's consistent points (none: no fix); the pose is the
-/// last view's.
-fn fix_from(sums: &Sums, views: &[Option<View>; MAX_VIEWS]) -> Option<Fix> {
-    let step = cfg::GRID_MM;
+/// The fix from a pass's consistent points and their settled clusters
+/// (none: no fix); the poses are the last view's.
+fn fix_from(sums: &Sums, gather: &Gather, views: &[Option<View>; MAX_VIEWS]) -> Option<Fix> {
     let last = views.iter().flatten().last()?;
-    if sums.n == 0 {
-        return None;
-    }
-    let n = i64::from(sums.n);
-    // the mean and the spread in 1/256 mm (n >= 1; one division each: once
-    // per search, not on the loop)
-    let mean = |sum: i64| crate::math::div_i64(sum << 8, n).unwrap_or(0);
-    let (mx, my) = (mean(sums.x), mean(sums.y));
-    // variance in mm^2 << 16: E[x^2] - mean^2, never negative
-    let var = |sq: i64, m: i64| (crate::math::div_i64(sq << 16, n).unwrap_or(0) - m * m).max(0);
-    // plus the grid's (step^2 / 12) and the lidar's noise, mm^2 << 16
-    let floor = ((i64::from(step) * i64::from(step)) << 16) / 12
-        + i64::from(crate::config::estimator::LIDAR_SIGMA.0 >> 8)
-            * i64::from(crate::config::estimator::LIDAR_SIGMA.0 >> 8);
-    // sqrt(v << 16) = sigma << 8 -> Q16: << 8
-    let sigma = |v: i64| Length((isqrt64((v + floor) as u64).min(1 << 22) << 8) as i32);
-    let span = cfg::AMBIGUOUS_SPAN_MM;
+    let (_, sigma_x, sigma_y) = sums.stats()?;
     let (ox, oy) = (i64::from(last.offset.0) << 8, i64::from(last.offset.1) << 8);
-    let pose = Pose::new(
-        Coord::from_length(Length(((mx + ox) << 8) as i32)),
-        Coord::from_length(Length(((my + oy) << 8) as i32)),
-        last.pose.theta,
-    );
+    // a mean in 1/256 mm of the first view's point -> the last view's
+    let at = |m: i64, o: i64| Coord::from_length(Length(((m + o) << 8) as i32));
+    let empty = Cluster { x: last.pose.x, y: last.pose.y, sigma_x, sigma_y, weight: 0, points: 0 };
+    let mut slots = [empty; MAX_CLUSTERS];
+    let mut count = 0u8;
+    for (slot, c) in slots.iter_mut().zip(gather.clusters()) {
+        let Some((mean, sx, sy)) = c.stats() else { continue };
+        let weight = crate::math::div_i64(i64::from(c.n) << 16, i64::from(sums.n)).unwrap_or(0) as u32;
+        let (mx, my) = mean;
+        *slot = Cluster { x: at(mx, ox), y: at(my, oy), sigma_x: sx, sigma_y: sy, weight, points: c.n };
+        count = count.saturating_add(1);
+    }
+    let first = gather.clusters().next()?;
     Some(Fix {
-        pose,
-        sigma_x: sigma(var(sums.xx, mx)),
-        sigma_y: sigma(var(sums.yy, my)),
+        pose: slots.first().map_or(last.pose, |c| Pose::new(c.x, c.y, last.pose.theta)),
+        sigma_x,
+        sigma_y,
         points: sums.n,
-        ambiguous: sums.max_x.saturating_sub(sums.min_x) > span || sums.max_y.saturating_sub(sums.min_y) > span,
+        ambiguous: gather.clusters().nth(1).is_some() || first.wide(),
+        cluster_slots: slots,
+        count,
     })
 }
