@@ -11,21 +11,8 @@
 //! the compass; then [`run`]: the control loop at `config::timing::LOOP_HZ`
 //! fed by UART0, the watchdog fed every pass, the LED blinking the state.
 #![cfg_attr(target_arch = "xtensa", no_std, no_main)]
-// The same panic lints as the library (src/lib.rs, issue 8): errors in the
-// firmware build; the host stub has nothing they could catch.
-#![cfg_attr(
-    not(test),
-    deny(
-        clippy::unwrap_used,
-        clippy::expect_used,
-        clippy::panic,
-        clippy::indexing_slicing,
-        clippy::unreachable,
-        clippy::todo,
-        clippy::unimplemented,
-        clippy::arithmetic_side_effects
-    )
-)]
+// The library's panic lints (Cargo.toml's `[lints.clippy]`) are errors here
+// too; the host stub has nothing they could catch.
 
 #[cfg(not(target_arch = "xtensa"))]
 fn main() {

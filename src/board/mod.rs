@@ -8,7 +8,7 @@
 //!   edges) and the CAS-free loop-to-interrupt handoff of pulse widths;
 //! - [`uart`]: the UART0 baud divider.
 //!
-//! The board holds no simulator code: `tests/bitbang_i2c.rs` runs the
+//! The board holds no simulator code: `tests/drivers/bitbang_i2c.rs` runs the
 //! master cycle by cycle on the simulator's wire (`sim::wire`, the one wire
 //! model, which the emulated board drives too).
 //!

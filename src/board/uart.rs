@@ -90,6 +90,7 @@ const _: () = {
 };
 
 #[cfg(test)]
+#[allow(clippy::restriction)] // test code: a panic fails the test
 mod tests {
     use super::*;
 

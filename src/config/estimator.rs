@@ -56,9 +56,9 @@ pub const MAX_INCIDENCE_DEG: f64 = 60.0;
 /// the wrong wall inside 30 mm, and a turn at a corner sweeps the
 /// cone's edge across a glancing wall: at 35 mm the realistic
 /// simulator's hours, from the power-up localization, took such a
-/// reading as the other wall's and jumped 22 mm (tests/realistic_hour.rs:
+/// reading as the other wall's and jumped 22 mm (tests/sim/realistic_hour.rs:
 /// worst 34.4 mm over 20 seeds; at 40 mm, 24.0 mm). Larger is not
-/// better: from 45 mm the real drive (tests/lab2_drive.rs) loses
+/// better: from 45 mm the real drive (tests/estimator/lab2_drive.rs) loses
 /// readings it needs and steps further than the wheels drive.
 pub const CORNER_MARGIN: Length = Length::from_mm_f64(40.0);
 /// Initial position uncertainty (one sigma), mm: the robot is put down by
@@ -93,7 +93,7 @@ pub const REACQUIRE_AFTER: u8 = 10;
 /// bounded steps, one per run of `REACQUIRE_AFTER` outliers, instead of
 /// jumping across the box. The real robot's turns leave position errors
 /// of about 100 mm (issue 23): one step covers them. Measured
-/// (tests/estimator_no_teleport.rs, a robot standing 550 mm from where
+/// (tests/estimator/no_teleport.rs, a robot standing 550 mm from where
 /// a settled estimate believes it): 4 re-acquisitions, 1.2 s until
 /// within 20 mm; at 30 mm, 6 steps of 105 mm and 1.5-1.8 s; at 60 mm,
 /// 3 steps of 210 mm and 0.9 s. The realistic simulated hour (worst

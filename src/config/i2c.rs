@@ -31,7 +31,7 @@ pub const T_BUF_MIN_NS: u32 = 1_300;
 pub const RECOVERY_CLOCKS: u8 = 9;
 /// Times a failed transaction is run again before the driver sees the
 /// error (`driver::bus::Retry`), count. Source: the fault runs
-/// (tests/faults_long.rs): a lidar bring-up is ~110 transactions, so
+/// (tests/control/faults_long.rs): a lidar bring-up is ~110 transactions, so
 /// without retries it got through a bus with 1 % faulty transactions
 /// about one try in three; with 2 retries a transaction fails only when
 /// three attempts in a row do (1e-6 at 1 %, 4e-4 at 10 % of which 3/4

@@ -62,7 +62,7 @@ pub const VIEW_LIMIT_MS: u32 = 300;
 /// (`pose` or `locate` then).
 pub const AT_POWER_UP: bool = true;
 /// Views taken before the first search: two views can agree on a
-/// wrong pose far off (`tests/locate.rs`: 75 % right from two, 99.2 %
+/// wrong pose far off (`tests/localization/locate.rs`: 75 % right from two, 99.2 %
 /// from three).
 pub const MIN_VIEWS: usize = 3;
 /// The turn in place between views, degrees: two views at 45 degrees

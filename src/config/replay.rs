@@ -9,7 +9,7 @@ pub const LOST_ACCEPTED_SHARE: f64 = 0.5;
 /// ... or whose lidar readings disagree with it by more than this on
 /// average, in lidar sigmas (the mean normalised innovation,
 /// `host::replay_stats`): the real drive replayed from its own
-/// localization disagrees by 3 to 5 (`tests/lab2_drive.rs`), an estimate
+/// localization disagrees by 3 to 5 (`tests/estimator/lab2_drive.rs`), an estimate
 /// 30 mm off along a beam square to its wall by 15 (30 mm over the 2 mm
 /// sigma, `estimator::LIDAR_SIGMA`); today's estimator, started confident at a wrong
 /// pose, still accepts most readings (re-acquisition takes their side) while

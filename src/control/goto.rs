@@ -197,6 +197,7 @@ fn bearing(x: i64, y: i64) -> Angle {
 }
 
 #[cfg(test)]
+#[allow(clippy::restriction)] // test code: a panic fails the test
 mod tests {
     use super::*;
     use crate::math::Dt;

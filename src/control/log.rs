@@ -242,6 +242,7 @@ impl<T: RowLog> RowLog for &mut T {
 }
 
 #[cfg(test)]
+#[allow(clippy::restriction)] // test code: a panic fails the test
 mod tests {
     use super::*;
 

@@ -10,7 +10,7 @@
 //!
 //! The grammar, every command's answers, the status line and the telemetry
 //! columns are described once, in `docs/protocol.md`, whose examples
-//! `tests/protocol_docs.rs` runs on the control loop. In short: one command
+//! `tests/protocol/docs.rs` runs on the control loop. In short: one command
 //! per line, at most [`MAX_LINE`] bytes; every line gets one answer, `# ok
 //! <canonical command>` ([`format_command`]: parsing it gives the same
 //! command) or `# err <problem>` ([`ParseError`]), and a refused line

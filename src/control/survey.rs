@@ -19,8 +19,8 @@
 //!    and view, up to [`MAX_VIEWS`], whose answer is taken as it is (an
 //!    ambiguous fix says so).
 //!
-//! `tests/locate.rs` measures this survey on the realistic simulator's
-//! sensors (99.2 % right from random starts); `tests/localize.rs` runs it
+//! `tests/localization/locate.rs` measures this survey on the realistic simulator's
+//! sensors (99.2 % right from random starts); `tests/localization/localize.rs` runs it
 //! in the loop.
 //!
 //! The survey owns no hardware and no clock: the loop hands it the

@@ -1,5 +1,5 @@
 //! Quarter-wave sine table: `SIN_Q30[i] = round(sin(i * (pi/2) / 256) * 2^30)`,
-//! i = 0..=256. Generated; `tests/trig.rs` recomputes every entry in f64 and
+//! i = 0..=256. Generated; `tests/math/trig.rs` recomputes every entry in f64 and
 //! fails if one differs.
 
 pub(crate) const SIN_Q30: [i32; 257] = [

@@ -19,7 +19,7 @@ fn table(i: u32) -> i32 {
 }
 
 /// `(sin a, cos a)` in Q2.30 (2^30 = 1). Max error 1.2e-7 (checked against f64
-/// over every table interval in `tests/trig.rs`). About 40 lx106
+/// over every table interval in `tests/math/trig.rs`). About 40 lx106
 /// instructions, no division, no 64-bit multiply.
 ///
 /// `sin(t + d) = s0 (1 - d^2/2) + c0 d` and `cos(t + d) = c0 (1 - d^2/2) - s0 d`,

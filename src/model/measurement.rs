@@ -519,6 +519,7 @@ pub fn expected_heading(pose: &Pose) -> Angle {
 }
 
 #[cfg(test)]
+#[allow(clippy::restriction)] // test code: a panic fails the test
 mod tests {
     use super::*;
 

@@ -9,7 +9,7 @@
 //!   moves the point the wrong way for every heading but 0 and 180 deg (facing
 //!   north and turning clockwise, the point ahead of the axle moves east, not
 //!   west). No point fixed on the car follows the printed form; a rigid body
-//!   follows this one (see docs/architecture.md and `tests/simulate.rs`).
+//!   follows this one (see docs/architecture.md and `tests/sim/simulate.rs`).
 //! - Stop: nothing moves.
 //!
 //! Integer only: two [`mul_hi`] products and at most one [`sin_cos`] per

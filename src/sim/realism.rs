@@ -177,7 +177,7 @@ impl Realism {
 
     /// The long-run tests' world: the environment's `PAPERBOT_REALISM`
     /// (`ideal`, `lab`, `hard`), else `default` (e.g.
-    /// `PAPERBOT_REALISM=hard cargo test --test realistic_hour`); an
+    /// `PAPERBOT_REALISM=hard cargo test --test sim realistic_hour::`); an
     /// unknown name is an error (a run that asked for a world must get it).
     pub fn from_env_or(default: Realism) -> Result<Realism, std::string::String> {
         match std::env::var("PAPERBOT_REALISM") {

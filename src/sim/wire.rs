@@ -18,7 +18,7 @@
 //! left in the middle of a read ([`Wire::stuck_mid_read`]).
 //!
 //! Time, for the board's bit-banged master tested cycle by cycle
-//! (`tests/bitbang_i2c.rs`): the owner moves the wire's clock
+//! (`tests/drivers/bitbang_i2c.rs`): the owner moves the wire's clock
 //! ([`Wire::advance`]; any unit, CPU cycles there); a slave may then stretch
 //! the clock after each ACK ([`Wire::set_stretch`]), and the wire can
 //! record every level change with its time and every START and STOP

@@ -1,6 +1,8 @@
 //! Helpers shared by the integration tests. Each test binary uses a subset.
 #![allow(dead_code, unused_imports)]
 
+pub mod estimator;
+pub mod longrun;
 pub mod rng;
 
 /// A lab data file from tests/data/lab1/.

@@ -12,7 +12,7 @@ use paperbot::driver::{HeadingSensor, MagCalibrate};
 
 /// The chips' addresses (AD0 low; the AK8963 on the bypassed bus).
 pub use paperbot::config::i2c::{AK8963_ADDR as AK, MPU9250_ADDR as MPU};
-/// The AK8963's registers and bits: the driver's map (`tests/compass.rs`
+/// The AK8963's registers and bits: the driver's map (`tests/drivers/compass.rs`
 /// checks it against the datasheet), under the names the scripts use.
 pub use paperbot::driver::compass::ak::{
     ASAX, BITM, CNTL1, DEVICE_ID as AK8963_ID, DRDY, HOFL, HXL, MODE_FUSE_ROM as FUSE_ROM,

@@ -183,7 +183,7 @@ fn q16_to_micro(a: u32) -> u32 {
 
 /// The answer line to a calibration sweep's end: `# ...` for a result (or
 /// an abandoned sweep), `# err ...` (the protocol's `ERR`) for a failure.
-/// `tests/control.rs` pins the lines.
+/// `tests/control/basics.rs` pins the lines.
 pub fn format_calibration_report(
     t: &mut dyn TextOut,
     result: Option<Result<MagCalibration, CalibrationError>>,
@@ -253,6 +253,7 @@ pub fn format_config_line(out: &mut dyn TextOut, cal: &MagCalibration) -> Result
 }
 
 #[cfg(test)]
+#[allow(clippy::restriction)] // test code: a panic fails the test
 mod tests {
     use super::q16_to_micro;
 

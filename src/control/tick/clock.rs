@@ -129,6 +129,7 @@ pub(super) fn whole_ms(us: u64) -> u32 {
 }
 
 #[cfg(test)]
+#[allow(clippy::restriction)] // test code: a panic fails the test
 mod tests {
     use super::whole_ms;
 

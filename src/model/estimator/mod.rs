@@ -66,13 +66,13 @@
 //!
 //! Measured: the held turn of 0.3-1 s and the held 1 s straight are back
 //! within 5 degrees and 20 mm 0.06-0.36 s after the body is free
-//! (`tests/soak.rs`); over the soak's million ticks the estimate stays
+//! (`tests/control/soak.rs`); over the soak's million ticks the estimate stays
 //! within the margin and the error at checkpoints clear of walls has a 90th
 //! percentile of 20 mm / 4 degrees. A standing robot 550 mm and half a turn
 //! from where a settled estimate believes it is found again in one compass
 //! and four lidar re-acquisitions, every step within the gate of its
 //! covariance, within 20 mm after 1.2-1.3 s
-//! (`tests/estimator_no_teleport.rs`).
+//! (`tests/estimator/no_teleport.rs`).
 //! Cost on the robot: the accepted paths end a run (a store) and keep the
 //! position in bounds (two 32-bit compares per axis on the coordinates'
 //! high words; predict skips it standing still); everything about a run of

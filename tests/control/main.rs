@@ -1,0 +1,11 @@
+//! The control loop: commands, untethered missions, long soaks with faults.
+// Test code: a panic fails the test (the robot's lints, Cargo.toml).
+#![allow(clippy::restriction)]
+
+#[path = "../common/mod.rs"]
+mod common;
+
+mod basics;
+mod faults_long;
+mod soak;
+mod untethered;

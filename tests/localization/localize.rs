@@ -1,0 +1,187 @@
+//! Localization as the robot does it (`control::survey` in the loop), on
+//! the realistic simulator: the robot powers up at a random pose in the
+//! box, not knowing where it is, takes its views turning in place, and
+//! starts its estimate at the fix. The issue's bar (the right pose, 30 mm
+//! and 5 degrees, from 95 % of random starts), wrong fixes flagged, the
+//! estimate certain enough for `goto` a second later, and what it costs in
+//! time. Measured (lab's world): 982 of 1,000 right, 13 reported
+//! ambiguous, 7 wrong and not flagged, 958 steerable; 2.5 s median, 9.7 s
+//! at the 95th percentile (`cargo test --release --test localization localize:: --
+//! --nocapture` prints the figures). The hard world's (issue #29): see
+//! `the_robot_finds_itself_in_the_hard_world`.
+
+use crate::common;
+use common::rng::{random_pose_in_box, Rng};
+use paperbot::sim::body::PoseF64;
+use paperbot::sim::realism::Realism;
+use paperbot::sim::robot::{SimConfig, SimRobot};
+
+/// How one power-up went.
+struct Run {
+    /// The `# located` or `# locate failed` line.
+    line: String,
+    seconds: f64,
+    off_mm: f64,
+    off_deg: f64,
+    /// A second later, the estimate is certain enough for `goto`.
+    steerable: bool,
+}
+
+/// Powers up at `start` and runs until the procedure ends (at most its
+/// time limit and a second).
+fn power_up(start: PoseF64, seed: u64, realism: Realism) -> Run {
+    let mut robot = SimRobot::new(SimConfig { start, seed, realism, ..SimConfig::default() });
+    assert_eq!(robot.take_output(), ["# ok locate"]);
+    robot.send("rate 0");
+    let limit_ticks = (paperbot::config::locate::TIME_LIMIT_MS + 1_000) / 10;
+    for _ in 0..limit_ticks {
+        robot.tick();
+        if let Some(line) = robot.take_output().into_iter().find(|l| l.starts_with("# locate")) {
+            let s = robot.sample();
+            for _ in 0..100 {
+                robot.tick();
+            }
+            let sigma = robot.controller().estimator().sigma();
+            let limit = f64::from(paperbot::config::goto::MAX_SIGMA_MM);
+            return Run {
+                line,
+                seconds: s.t_us as f64 * 1e-6,
+                off_mm: s.truth.distance(&s.estimate),
+                off_deg: s.estimate.heading_error(&s.truth).to_degrees().abs(),
+                steerable: sigma.x.to_mm_f64() <= limit && sigma.y.to_mm_f64() <= limit,
+            };
+        }
+    }
+    panic!("no answer from the localization at {start:?}");
+}
+
+/// The tally of 1,000 power-ups in `realism`: (right, ambiguous, failed,
+/// wrong and not flagged, steerable).
+fn power_ups(name: &str, realism: Realism) -> (usize, usize, usize, usize, usize) {
+    let mut rng = Rng::new(1523);
+    let starts = 1_000;
+    let (mut right, mut ambiguous, mut failed, mut steerable) = (0, 0, 0, 0);
+    let mut wrong_unflagged = vec![];
+    let mut seconds = vec![];
+    for i in 0..starts {
+        let start = random_pose_in_box(&mut rng);
+        let run = power_up(start, i, realism);
+        seconds.push(run.seconds);
+        steerable += usize::from(run.steerable);
+        if !run.line.starts_with("# located ") {
+            failed += 1;
+            continue;
+        }
+        let flagged = run.line.contains("ambiguous");
+        let ok = run.off_mm <= 30.0 && run.off_deg <= 5.0;
+        right += usize::from(ok);
+        ambiguous += usize::from(flagged);
+        if !ok && !flagged {
+            wrong_unflagged.push((run.off_mm, run.line, (i, start)));
+        }
+    }
+    seconds.sort_by(f64::total_cmp);
+    println!(
+        "{name} world, power-up localization: {right} of {starts} right (30 mm, 5 deg); {ambiguous} reported ambiguous; \
+         {failed} failed; {} wrong and not flagged; {steerable} certain enough for goto a second later; time median {:.1} s, 95th percentile {:.1} s, worst {:.1} s",
+        wrong_unflagged.len(),
+        seconds[starts as usize / 2],
+        seconds[starts as usize * 95 / 100],
+        seconds[starts as usize - 1],
+    );
+    for (off, line, start) in wrong_unflagged.iter().take(10) {
+        println!("  wrong, not flagged: off {off:.0} mm: {line} (truth {start:?})");
+    }
+    (right, ambiguous, failed, wrong_unflagged.len(), steerable)
+}
+
+#[test]
+fn the_robot_finds_itself_at_power_up_from_random_starts() {
+    let starts = 1_000;
+    let (right, _, _, wrong_unflagged, steerable) = power_ups("lab", Realism::LAB);
+    assert!(right * 100 >= starts * 95, "{right} of {starts}");
+    assert!(steerable * 100 >= starts * 90, "{steerable} of {starts} certain enough for goto");
+    assert!(wrong_unflagged * 100 <= starts, "{wrong_unflagged} wrong fixes not flagged");
+}
+
+/// Issue #29's bar in the hard world: right >= 98 %, wrong and not flagged
+/// <= 0.2 %. Not met by today's search (see tests/localization/locate.rs's hard-world
+/// test for why); measured: `HARD_POWER_UP`. Asserted: no worse than
+/// that; the bar is printed, advisory. Ignored for its time (35 s in
+/// release, minutes in the test profile):
+/// `cargo test --release --test localization localize:: -- --ignored --nocapture`.
+#[test]
+#[ignore = "minutes: the hard world's failing searches try every heading; prints issue #29's figures"]
+fn the_robot_finds_itself_in_the_hard_world() {
+    let starts = 1_000;
+    let (right, _, _, wrong_unflagged, _) = power_ups("hard", Realism::HARD);
+    let bar = right * 100 >= starts * 98 && wrong_unflagged * 1000 <= starts * 2;
+    println!(
+        "hard world: issue #29's bar (right >= 98 %, wrong and not flagged <= 0.2 %) {}",
+        if bar { "met" } else { "NOT met (advisory)" }
+    );
+    let (floor_right, ceiling_wrong) = HARD_POWER_UP;
+    assert!(right >= floor_right, "{right} of {starts}");
+    assert!(wrong_unflagged <= ceiling_wrong, "{wrong_unflagged} wrong fixes not flagged");
+}
+
+/// Measured in the hard world, 1,000 power-ups: (right, wrong and not
+/// flagged). Also: none reported ambiguous, 198 failed (nothing fits, or
+/// out of time), 670 certain enough for goto a second later; time median
+/// 8.4 s, 95th percentile 60.1 s (the time limit). 35 s in release.
+const HARD_POWER_UP: (usize, usize) = (43, 759);
+
+/// After the fix the estimator tracks: a `goto` from the located pose gets
+/// where it was sent (on the truth), and `reset` finds the robot again
+/// after it was carried elsewhere.
+#[test]
+fn after_the_fix_goto_works_and_reset_relocates() {
+    let start = PoseF64::new(300.0, 250.0, 0.5);
+    let mut robot = SimRobot::new(SimConfig { start, seed: 5, ..SimConfig::default() });
+    robot.send("rate 0");
+    for _ in 0..1_000 {
+        robot.tick();
+    }
+    let lines = robot.take_output();
+    assert!(lines.iter().any(|l| l.starts_with("# located ")), "{lines:?}");
+    robot.send("goto 500 300");
+    for _ in 0..800 {
+        robot.tick();
+    }
+    let t = robot.truth();
+    assert!((t.x - 500.0).hypot(t.y - 300.0) <= 20.0, "the goto ended at {t:?}: {:?}", robot.take_output());
+    // carried to the other end of the box, turned
+    robot.set_truth(PoseF64::new(650.0, 120.0, 4.0));
+    robot.take_output();
+    robot.send("reset");
+    for _ in 0..1_000 {
+        robot.tick();
+    }
+    let lines = robot.take_output();
+    assert!(lines.iter().any(|l| l.starts_with("# located ")), "{lines:?}");
+    let s = robot.sample();
+    assert!(s.truth.distance(&s.estimate) <= 30.0, "{lines:?} {s:?}");
+}
+
+/// A `goto` on an estimate too uncertain to steer by finds the pose first,
+/// then goes; in a mission too (the cable pulled: nobody to type `pose`).
+#[test]
+fn a_goto_when_lost_locates_first_then_goes() {
+    let start = PoseF64::new(300.0, 250.0, 0.5);
+    let mut robot = SimRobot::new(SimConfig { start, seed: 5, locate_at_power_up: false, ..SimConfig::default() });
+    robot.send("rate 0");
+    // told a wrong pose: 100 mm uncertain, and 200 mm off
+    robot.send("pose 500 150 30");
+    robot.send("goto 200 300");
+    let mut lines = robot.take_output();
+    assert_eq!(lines[2], "# estimate too uncertain to steer by: locating first", "{lines:?}");
+    for _ in 0..2_000 {
+        robot.tick();
+        lines.extend(robot.take_output());
+    }
+    let located = lines.iter().position(|l| l.starts_with("# located ")).expect("a fix");
+    assert_eq!(lines[located + 1], "# ok goto 200 300", "{lines:?}");
+    assert!(lines.iter().any(|l| l.starts_with("# done at")), "{lines:?}");
+    let t = robot.truth();
+    assert!((t.x - 200.0).hypot(t.y - 300.0) <= 20.0, "ended at {t:?}");
+}

@@ -1,0 +1,386 @@
+//! Localization from no prior pose (`model::locate`): from random poses in
+//! the box, with readings from the simulator's sensor models (the lab's
+//! world: the lidars' cones, their noise and glancing failures, the
+//! compass's noise and disturbance; the hard world: a robot drawn per start,
+//! `sim::realism::Realism::HARD`), the search finds the pose; the places
+//! it returns ([`Fix::clusters`]).
+
+use crate::common;
+use common::rng::{random_pose_in_box, Rng};
+use paperbot::config;
+use paperbot::math::{Angle, Length};
+use paperbot::model::locate::{locate, Fix, Readings, Search, MAX_VIEWS};
+use paperbot::model::measurement::Arena;
+use paperbot::model::LidarModel;
+use paperbot::sim::arena::Arena as SimArena;
+use paperbot::sim::body::{advance, Kinematics, MotionF64, PoseF64};
+use paperbot::sim::drawn::Drawn;
+use paperbot::sim::realism::{Realism, Trial};
+use paperbot::sim::robot::{body_fits, lidar_truth};
+
+/// The world a start is in: its realism and what the start drew from it.
+struct World {
+    realism: Realism,
+    drawn: Drawn,
+}
+
+impl World {
+    /// The lab's world (the compass pattern's phase drawn from `rng`).
+    fn lab(rng: &mut Rng) -> World {
+        World { realism: Realism::LAB, drawn: Drawn::draw(0, &Realism::LAB, rng.range_f64(0.0, std::f64::consts::TAU)) }
+    }
+    /// The hard world, a robot drawn for start `start`.
+    fn hard(start: u64, rng: &mut Rng) -> World {
+        let phase = rng.range_f64(0.0, std::f64::consts::TAU);
+        World { realism: Realism::HARD, drawn: Drawn::draw(start, &Realism::HARD, phase) }
+    }
+}
+
+/// One averaged lidar reading as the firmware sees it (the model output of
+/// the mean of `n` raw readings), or `None` when the reading failed.
+fn lidar(
+    w: &World,
+    p: &PoseF64,
+    which: paperbot::model::measurement::LidarId,
+    model: &LidarModel,
+    rng: &mut Rng,
+) -> Option<Length> {
+    let n = config::locate::LIDAR_READINGS;
+    let mean = if w.realism == Realism::LAB {
+        // the lab's world: one draw of the geometry, the sensor's noise averaged
+        let d = lidar_truth(&SimArena::default(), &w.realism, p, &which.mount(), rng)?;
+        (0..n).map(|_| d + rng.gauss(config::sim::LIDAR_NOISE_MM)).sum::<f64>() / f64::from(n)
+    } else {
+        // the hard world: each reading its own (spurious echoes, mixed
+        // returns, incidence noise), the median of those that came back,
+        // as the firmware takes a view
+        let mut got: Vec<f64> = vec![];
+        for _ in 0..n {
+            if let Some(d) = lidar_truth(&SimArena::default(), &w.realism, p, &which.mount(), rng) {
+                got.push(d + rng.gauss(config::sim::LIDAR_NOISE_MM));
+            }
+        }
+        got.sort_by(f64::total_cmp);
+        *got.get(got.len().checked_sub(1)? / 2)?
+    };
+    let raw = model.reading_for(Length::from_mm_f64(mean))?;
+    model.range(raw).distance()
+}
+
+/// One view as the firmware takes it at `truth`: the averaged compass
+/// heading (the floor's disturbance at `phase`, the averaged noise) and the
+/// two lidars.
+fn view(w: &World, truth: &PoseF64, rng: &mut Rng) -> Readings {
+    use paperbot::model::measurement::LidarId;
+    let compass_err = w.drawn.compass_bias(&SimArena::default(), truth.x, truth.y, &w.realism)
+        + rng.gauss(config::sim::COMPASS_NOISE_DEG / f64::from(config::locate::COMPASS_READINGS).sqrt()).to_radians();
+    Readings {
+        heading: Angle::from_radians_f64(truth.theta + compass_err),
+        front: lidar(w, truth, LidarId::Front, &config::lidar::FRONT, rng),
+        right: lidar(w, truth, LidarId::Right, &config::lidar::RIGHT, rng),
+    }
+}
+
+/// A turn in place of about `degrees` (clockwise when positive) as the
+/// realistic simulator drives it (`sim::robot::SimRobot::tick`): the loop's
+/// ticks at the cw or ccw rate, the trial's speed factor, per-tick noise, a
+/// pivot behind the axle, and the body held where it would leave the box;
+/// in the hard world the run's turn factor and pivot too.
+fn turn(w: &World, start: &PoseF64, degrees: f64, rng: &mut Rng) -> PoseF64 {
+    let realism = w.realism;
+    let arena = SimArena::default();
+    let rate = 2.5f64.copysign(degrees); // rad/s, the `cw` of the lab's scripts
+    let dt = 1.0 / f64::from(config::timing::LOOP_HZ);
+    let ticks = (degrees.to_radians() / rate / dt).round() as u32;
+    let motion = MotionF64::Turn(rate);
+    let trial = Trial::NONE.for_motion(motion, &realism, rng);
+    let d = config::geometry::ROTATION_TO_REFERENCE.to_mm_f64() + trial.pivot_behind_mm + w.drawn.pivot_offset_mm;
+    let scale = w.drawn.turn_factor(degrees > 0.0, 0.0, &realism);
+    let mut p = *start;
+    for _ in 0..ticks {
+        let w = rate * scale * trial.speed_factor * (1.0 + rng.gauss(config::sim::TURN_NOISE));
+        let next = advance(&p, MotionF64::Turn(w), dt, Kinematics::Rigid, d);
+        if body_fits(&arena, &realism, &next) {
+            p = next;
+        }
+    }
+    p
+}
+
+/// How a fix compares with the truth.
+#[derive(Default)]
+struct Tally {
+    right: usize,
+    ambiguous: usize,
+    ambiguous_right: usize,
+    /// The truth is one of the fix's clusters (30 mm, 5 degrees): a tracker
+    /// seeded from them holds it.
+    among_clusters: usize,
+    /// Fixes with more than one cluster.
+    several: usize,
+    /// Within 30 mm whatever the heading.
+    position_right: usize,
+    failed: usize,
+    wrong_unflagged: Vec<(f64, f64, PoseF64)>,
+}
+
+/// Within 30 mm and 5 degrees: the issue's "right".
+fn close(got: &PoseF64, truth: &PoseF64) -> bool {
+    got.distance(truth) <= 30.0 && got.heading_error(truth).to_degrees().abs() <= 5.0
+}
+
+impl Tally {
+    fn add(&mut self, fix: Option<Fix>, truth: &PoseF64) {
+        let Some(fix) = fix else {
+            self.failed += 1;
+            return;
+        };
+        let got = PoseF64::from_pose(&fix.pose);
+        let right = close(&got, truth);
+        self.right += usize::from(right);
+        self.ambiguous += usize::from(fix.ambiguous);
+        self.ambiguous_right += usize::from(fix.ambiguous && right);
+        self.among_clusters +=
+            usize::from(fix.clusters().iter().any(|c| close(&PoseF64::from_pose(&fix.pose_of(c)), truth)));
+        self.several += usize::from(fix.clusters().len() > 1);
+        self.position_right += usize::from(got.distance(truth) <= 30.0);
+        if !right && !fix.ambiguous {
+            let sigma = fix.sigma_x.to_mm_f64().hypot(fix.sigma_y.to_mm_f64());
+            self.wrong_unflagged.push((got.distance(truth), sigma, *truth));
+        }
+    }
+
+    fn print(&self, what: &str, starts: usize) {
+        println!(
+            "{what}: {} of {starts} right (30 mm, 5 deg); {} reported ambiguous ({} of them right anyway); \
+             {} found nothing; {} wrong and not flagged; {} with several clusters; the truth among the clusters in {}; \
+             {} within 30 mm whatever the heading",
+            self.right,
+            self.ambiguous,
+            self.ambiguous_right,
+            self.failed,
+            self.wrong_unflagged.len(),
+            self.several,
+            self.among_clusters,
+            self.position_right,
+        );
+        for (d, sigma, t) in self.wrong_unflagged.iter().take(5) {
+            println!("  wrong, not flagged: off {d:.0} mm (sigma {sigma:.0} mm) at {t:?}");
+        }
+    }
+}
+
+/// The procedure from `starts` random starts in the world `world` makes
+/// for each: a view, then a turn of about 45 degrees clockwise and another
+/// view (counter-clockwise when the compass says the turn did not happen),
+/// at least three views (two can agree on a wrong pose), and more while the
+/// fix is ambiguous, up to MAX_VIEWS. The tallies after two views and at
+/// the end.
+fn procedure(starts: usize, world: impl Fn(u64, &mut Rng) -> World) -> (Tally, Tally) {
+    let mut rng = Rng::new(2315);
+    let (mut two, mut done) = (Tally::default(), Tally::default());
+    let mut views_used = [0usize; MAX_VIEWS + 1];
+    for start in 0..starts {
+        let mut truth = random_pose_in_box(&mut rng);
+        let w = world(start as u64, &mut rng);
+        let mut views = vec![view(&w, &truth, &mut rng)];
+        let mut degrees = 45.0;
+        let fix = loop {
+            truth = turn(&w, &truth, degrees, &mut rng);
+            views.push(view(&w, &truth, &mut rng));
+            // a body against a wall may not turn that way: the compass says
+            // so, and the next turns go the other way
+            if let [.., a, b] = views.as_slice() {
+                if b.heading.wrapping_sub(a.heading).to_signed_millidegrees().abs() < 20_000 {
+                    degrees = -degrees;
+                }
+            }
+            let fix = locate(&Arena::DEFAULT, &views).ok();
+            if views.len() == 2 {
+                two.add(fix, &truth);
+            }
+            if views.len() == MAX_VIEWS || (views.len() >= 3 && fix.is_some_and(|f| !f.ambiguous)) {
+                break fix;
+            }
+        };
+        views_used[views.len()] += 1;
+        done.add(fix, &truth);
+    }
+    println!("  views taken (views, starts): {:?}", views_used.iter().enumerate().skip(3).collect::<Vec<_>>());
+    (two, done)
+}
+
+/// The lab's world: the bar the firmware's procedure was built to (95 %
+/// right, at most 1 % wrong and not flagged). Measured: 992 right, 1 wrong
+/// and not flagged.
+#[test]
+fn views_turned_in_place_find_the_pose() {
+    let starts = 1_000;
+    let (two, done) = procedure(starts, |_, rng| World::lab(rng));
+    two.print("lab world: locate, two views 45 degrees apart", starts);
+    done.print("lab world: locate, three views and more while ambiguous", starts);
+    // Turning one way only leaves about 6 % ambiguous: a body against a
+    // wall that cannot turn takes the same view again.
+    assert!(done.right * 100 >= starts * 95, "{} of {starts}", done.right);
+    assert!(done.wrong_unflagged.len() * 100 <= starts, "{} wrong fixes not flagged", done.wrong_unflagged.len());
+}
+
+/// The hard world (a robot drawn per start, `Realism::HARD`): issue #29's
+/// bar is right >= 98 % and wrong and not flagged <= 0.2 %. Today's search
+/// does not meet it: its turn model (the pivot at the axle, 20 mm of
+/// tolerance) and its trust in the compass's heading are the lab's, and
+/// the hard world's pivot 60 +- 20 mm behind the axle and compass biased
+/// by 12 to 20 degrees leave no pose within the tolerances near the truth.
+/// Measured, 1,000 starts: 65 right, none reported ambiguous, 110 found
+/// nothing, 825 wrong and not flagged (140 within 30 mm whatever the
+/// heading). Taking one effect out at a time (200 starts) helps most
+/// with the lab's pivot (54 of 200 right, 112 within 30 mm), then the
+/// lab's lidars (33), compass (23), turn rates (12). Asserted: no worse
+/// than measured; the issue's bar is printed, advisory. Ignored for its
+/// time (100 s in release: the failing searches try every heading):
+/// `cargo test --release --test localization locate:: -- --ignored --nocapture`.
+#[test]
+#[ignore = "100 s in release; prints the hard world's figures (issue #29's bar not met yet)"]
+fn views_turned_in_place_in_the_hard_world() {
+    let starts = 1_000;
+    let (two, done) = procedure(starts, World::hard);
+    two.print("hard world: locate, two views 45 degrees apart", starts);
+    done.print("hard world: locate, three views and more while ambiguous", starts);
+    let bar = done.right * 100 >= starts * 98 && done.wrong_unflagged.len() * 1000 <= starts * 2;
+    println!(
+        "hard world: issue #29's bar (right >= 98 %, wrong and not flagged <= 0.2 %) {}",
+        if bar { "met" } else { "NOT met (advisory)" }
+    );
+    assert!(done.right >= HARD_RIGHT, "{} of {starts}", done.right);
+    assert!(
+        done.wrong_unflagged.len() <= HARD_WRONG_UNFLAGGED,
+        "{} wrong fixes not flagged",
+        done.wrong_unflagged.len()
+    );
+}
+
+/// Measured in the hard world, 1,000 starts (the test holds these levels).
+const HARD_RIGHT: usize = 65;
+const HARD_WRONG_UNFLAGGED: usize = 825;
+
+#[test]
+fn the_search_finds_the_pose_from_random_starts() {
+    let mut rng = Rng::new(23);
+    let starts = 1_000;
+    let mut one = Tally::default();
+    for _ in 0..starts {
+        let truth = random_pose_in_box(&mut rng);
+        let w = World::lab(&mut rng);
+        let r = view(&w, &truth, &mut rng);
+        one.add(locate(&Arena::DEFAULT, &[r]).ok(), &truth);
+    }
+    one.print("locate, one view", starts);
+    // One snapshot (a heading and two ranges) is right from half the
+    // starts (498 of 1,000; 369 before a point had to explain a reading and
+    // the fix became the heaviest cluster): half the poses have both cones
+    // on walls of one axis, and a reading that would be glancing at a point
+    // says nothing about it (`config::locate::GLANCING_DEG`), so those fixes
+    // are reported ambiguous (turning in place for more views, above,
+    // settles them). What this asserts is that level and that wrong fixes
+    // are almost always flagged.
+    assert!(one.right * 100 >= starts * 45, "{} of {starts}", one.right);
+    assert!(one.wrong_unflagged.len() * 100 <= starts * 3, "{} wrong fixes not flagged", one.wrong_unflagged.len());
+}
+
+/// The robot spreads the search over its ticks ([`Search::step`], a few
+/// grid columns at a time): the same answer as the search run to the end,
+/// from starts where the compass's heading fits and where it does not.
+#[test]
+fn the_search_a_few_columns_at_a_time_gives_the_same_fix() {
+    let mut rng = Rng::new(7);
+    let mut steps_seen = Vec::new();
+    for start in 0..40 {
+        let mut truth = random_pose_in_box(&mut rng);
+        let w = World::lab(&mut rng);
+        let mut views = vec![view(&w, &truth, &mut rng)];
+        for _ in 0..2 {
+            truth = turn(&w, &truth, 45.0, &mut rng);
+            views.push(view(&w, &truth, &mut rng));
+        }
+        if start % 4 == 0 {
+            // a compass 20 degrees off: passes at other headings
+            for v in &mut views {
+                v.heading = v.heading.wrapping_add(Angle::from_degrees_f64(20.0));
+            }
+        }
+        let whole = locate(&Arena::DEFAULT, &views);
+        let mut search = Search::new(&views).unwrap();
+        let mut steps = 0;
+        let stepped = loop {
+            steps += 1;
+            if let Some(r) = search.step(&Arena::DEFAULT, 3) {
+                break r;
+            }
+        };
+        assert_eq!(stepped, whole, "start {start}");
+        steps_seen.push(steps);
+    }
+    steps_seen.sort();
+    println!("steps of 3 columns: fewest {}, most {}", steps_seen[0], steps_seen[39]);
+    assert!(steps_seen[39] > 60, "a pass over the 153 columns takes 52 steps: some searches needed several");
+}
+
+/// A grid point where every reading would be glancing explains none of
+/// them: no fit. A front reading farther than any wall of the box, at a
+/// heading where the beam glances along the north wall from points near
+/// it: before this rule those points fitted (their only reading said
+/// nothing), now nothing does.
+#[test]
+fn a_point_whose_readings_all_glance_is_no_fit() {
+    let r = Readings { heading: Angle::from_degrees_f64(80.0), front: Some(Length::from_mm(2_000)), right: None };
+    assert_eq!(locate(&Arena::DEFAULT, &[r]), Err(paperbot::model::locate::LocateError::NothingFits));
+    // the same heading with a reading the box explains still finds it
+    let truth = PoseF64::new(380.0, 100.0, 80f64.to_radians());
+    let front = paperbot::model::measurement::expected_lidar(
+        &Arena::DEFAULT,
+        &truth.to_pose(),
+        paperbot::model::measurement::LidarId::Front,
+    );
+    let fix = locate(&Arena::DEFAULT, &[Readings { front, ..r }]).unwrap();
+    assert!(fix.points > 0);
+}
+
+/// Places apart are clusters, heaviest first, the fix the heaviest (never
+/// the mean of places apart) and flagged ambiguous; one place is one
+/// cluster with all the weight, the fix as before. From 1,000 one-view
+/// starts in the lab's world (one view leaves many places).
+#[test]
+fn places_apart_are_weighted_clusters_and_the_fix_is_never_their_mean() {
+    let mut rng = Rng::new(23);
+    let (mut several, mut one) = (0, 0);
+    for _ in 0..1_000 {
+        let truth = random_pose_in_box(&mut rng);
+        let w = World::lab(&mut rng);
+        let Ok(fix) = locate(&Arena::DEFAULT, &[view(&w, &truth, &mut rng)]) else { continue };
+        let c = fix.clusters();
+        assert!(!c.is_empty() && c.len() <= paperbot::model::locate::MAX_CLUSTERS);
+        assert_eq!(fix.pose, fix.pose_of(&c[0]), "the fix is the heaviest place");
+        assert!(c.windows(2).all(|p| p[0].weight >= p[1].weight && p[0].points >= p[1].points));
+        assert!(c.iter().map(|k| k.weight).sum::<u32>() <= 65_536 + c.len() as u32);
+        assert!(c.iter().map(|k| k.points).sum::<u32>() <= fix.points);
+        if c.len() == 1 {
+            one += 1;
+            assert!(c[0].weight >= 65_535 && c[0].points == fix.points);
+            assert_eq!((c[0].sigma_x, c[0].sigma_y), (fix.sigma_x, fix.sigma_y));
+            continue;
+        }
+        several += 1;
+        assert!(fix.ambiguous, "several places are ambiguous");
+        // places apart: no two together within the ambiguous span (else
+        // they would be one place)
+        let span = f64::from(config::locate::AMBIGUOUS_SPAN_MM);
+        for (i, a) in c.iter().enumerate() {
+            for b in &c[i + 1..] {
+                let (pa, pb) = (PoseF64::from_pose(&fix.pose_of(a)), PoseF64::from_pose(&fix.pose_of(b)));
+                assert!((pa.x - pb.x).abs().max((pa.y - pb.y).abs()) > span / 4.0, "{a:?} {b:?}");
+            }
+        }
+    }
+    println!("one view: {one} fixes of one place, {several} of several");
+    assert!(several > 50 && one > 500, "{several} {one}");
+}

@@ -1,0 +1,191 @@
+//! Issue #29's "done when" for the estimator, measured: 20 seeds x 10
+//! simulated minutes of `goto` laps (the built-in script) from the
+//! power-up localization, in the lab's and in the hard world
+//! (`sim::realism`). Per run: the RMS of the position error, the worst
+//! error, wall collisions, and the invariants: while the servos stand
+//! still the reported position moves at most 10 mm; between consecutive
+//! telemetry rows (10 Hz) it never moves more than the wheels can drive
+//! plus 25 mm; every reported pose lies in the box. Samples taken while
+//! the robot localizes do not count (it claims no pose then).
+//!
+//! The lab's world is asserted (its figures must not get worse); the hard
+//! world's bars (median of the runs' RMS <= 15 mm, worst run's RMS <= 50
+//! mm, no collision, the invariants) are not met by today's estimator: that
+//! test is `#[ignore]`d, awaiting the estimator's rework (issue #29 parts 2
+//! and 3), and prints its figures with
+//! `cargo test --release --test sim hard_world:: -- --ignored --nocapture`.
+//!
+//! Measured (lab world): see `lab_world_laps_keep_their_figures`; the hard
+//! world with today's estimator: docs/simulator.md (median rms 80.7 mm,
+//! 2 runs never located, 16 with collisions, all 20 break the invariants).
+
+use paperbot::config;
+use paperbot::control::TICK_US;
+use paperbot::sim::body::PoseF64;
+use paperbot::sim::realism::Realism;
+use paperbot::sim::robot::{SimConfig, SimRobot};
+use paperbot::sim::script::{default_script, Script};
+
+const MINUTES: u64 = 10;
+const SEEDS: u64 = 20;
+/// Standing still, the reported position moves at most this, mm.
+const STANDSTILL_MM: f64 = 10.0;
+/// Between rows it moves at most what the wheels can drive plus this, mm.
+const STEP_SLACK_MM: f64 = 25.0;
+/// Telemetry rows every this many ticks (10 Hz).
+const ROW_TICKS: u64 = 10;
+
+/// One run's figures.
+#[derive(Debug, Default)]
+struct Run {
+    /// The power-up localization gave a fix (else nothing below counts).
+    located: bool,
+    rms_mm: f64,
+    worst_mm: f64,
+    collisions: u32,
+    /// Largest move of the reported position while the servos stood
+    /// still, mm.
+    standstill_mm: f64,
+    /// Largest move between rows beyond what the wheels can drive, mm
+    /// (negative: within).
+    step_excess_mm: f64,
+    /// Largest distance of a reported pose outside the box, mm.
+    outside_mm: f64,
+}
+
+impl Run {
+    fn invariants_hold(&self) -> bool {
+        self.located
+            && self.standstill_mm <= STANDSTILL_MM
+            && self.step_excess_mm <= STEP_SLACK_MM
+            && self.outside_mm == 0.0
+    }
+}
+
+/// What the wheels can drive in `dt_s`, mm: the protocol's fastest straight
+/// speed, or the reference point's swing at the fastest turn rate.
+fn wheels_can_drive_mm(dt_s: f64) -> f64 {
+    let d = config::geometry::ROTATION_TO_REFERENCE.to_mm_f64();
+    let straight = f64::from(config::serial::MAX_SPEED_MM_S);
+    let swing = d * f64::from(config::serial::MAX_TURN_MRAD_S) / 1000.0;
+    straight.max(swing) * dt_s
+}
+
+fn laps(realism: Realism, seed: u64) -> Run {
+    let mut robot = SimRobot::new(SimConfig { seed, realism, ..SimConfig::default() });
+    robot.send("rate 0");
+    let limit = (config::locate::TIME_LIMIT_MS + 1_000) / 10;
+    let located = (0..limit).any(|_| {
+        robot.tick();
+        robot.take_output().iter().any(|l| l.starts_with("# located "))
+    });
+    if !located {
+        return Run::default();
+    }
+    let duration_us = MINUTES * 60_000_000;
+    let script = Script::parse(&default_script(duration_us as f64 / 1e6)).unwrap();
+    let stop = robot.controller().model().stop();
+    let (lx, wy) = (robot.cfg.arena.length_x_mm(), robot.cfg.arena.width_y_mm());
+    let allowed = wheels_can_drive_mm(ROW_TICKS as f64 * f64::from(TICK_US) * 1e-6);
+    let mut run = Run { located: true, step_excess_mm: f64::MIN, ..Run::default() };
+    let (mut sum_sq, mut n) = (0.0, 0u64);
+    let mut standing_since: Option<PoseF64> = None;
+    let mut last_row: Option<PoseF64> = None;
+    let start = robot.now_us();
+    let mut lines = script.lines.iter().peekable();
+    for tick in 0..duration_us / u64::from(TICK_US) {
+        let t = robot.now_us() - start;
+        while let Some(l) = lines.next_if(|l| l.at_us <= t) {
+            robot.send(&l.command);
+        }
+        robot.tick();
+        robot.take_output();
+        let s = robot.sample();
+        let servos = *robot.controller_mut().servos();
+        if s.locating {
+            (standing_since, last_row) = (None, None);
+            continue;
+        }
+        let e = s.estimate;
+        let err = e.distance(&s.truth);
+        (sum_sq, n) = (sum_sq + err * err, n + 1);
+        run.worst_mm = run.worst_mm.max(err);
+        run.outside_mm = run.outside_mm.max((-e.x).max(e.x - lx).max(-e.y).max(e.y - wy).max(0.0));
+        if (servos.left, servos.right) == (stop.left, stop.right) {
+            let anchor = *standing_since.get_or_insert(e);
+            run.standstill_mm = run.standstill_mm.max(anchor.distance(&e));
+        } else {
+            standing_since = None;
+        }
+        if tick % ROW_TICKS == 0 {
+            if let Some(prev) = last_row {
+                run.step_excess_mm = run.step_excess_mm.max(prev.distance(&e) - allowed);
+            }
+            last_row = Some(e);
+        }
+    }
+    run.rms_mm = (sum_sq / n.max(1) as f64).sqrt();
+    run.collisions = robot.collisions();
+    run
+}
+
+/// Runs the seeds, prints each and the summary; returns (median RMS,
+/// worst RMS, runs).
+fn world(name: &str, realism: Realism) -> (f64, f64, Vec<Run>) {
+    let runs: Vec<Run> = (1..=SEEDS).map(|seed| laps(realism, seed)).collect();
+    for (seed, r) in (1..).zip(&runs) {
+        println!(
+            "{name} seed {seed:2}: {} rms {:6.1} mm, worst {:6.1} mm; {} collision ticks; standing still moved {:5.1} mm, \
+             row step beyond the wheels' {:6.1} mm, outside the box {:5.1} mm{}",
+            if r.located { "located;" } else { "NEVER LOCATED;" },
+            r.rms_mm,
+            r.worst_mm,
+            r.collisions,
+            r.standstill_mm,
+            r.step_excess_mm,
+            r.outside_mm,
+            if r.invariants_hold() { "" } else { "  (invariants broken)" }
+        );
+    }
+    let mut rms: Vec<f64> = runs.iter().map(|r| if r.located { r.rms_mm } else { f64::INFINITY }).collect();
+    rms.sort_by(f64::total_cmp);
+    let (median, worst) = (rms[rms.len() / 2], rms[rms.len() - 1]);
+    println!(
+        "{name} world, {SEEDS} seeds x {MINUTES} min of goto laps: median rms {median:.1} mm, worst run's rms {worst:.1} mm; \
+         {} runs never located; {} runs with collisions ({} ticks); {} runs break the invariants \
+         (standing still <= {STANDSTILL_MM} mm, row steps <= wheels + {STEP_SLACK_MM} mm, in the box)",
+        runs.iter().filter(|r| !r.located).count(),
+        runs.iter().filter(|r| r.collisions > 0).count(),
+        runs.iter().map(|r| r.collisions).sum::<u32>(),
+        runs.iter().filter(|r| !r.invariants_hold()).count(),
+    );
+    (median, worst, runs)
+}
+
+/// The issue's bars in the hard world. Today's estimator does not meet
+/// them (see the module docs): ignored until the estimator's rework lands.
+#[test]
+#[ignore = "issue #29: today's estimator fails the hard world's bars; prints the figures"]
+fn hard_world_laps_meet_the_issues_bars() {
+    let (median, worst, runs) = world("hard", Realism::HARD);
+    assert!(median <= 15.0, "median rms {median:.1} mm");
+    assert!(worst <= 50.0, "worst rms {worst:.1} mm");
+    assert!(runs.iter().all(|r| r.collisions == 0), "collisions");
+    assert!(runs.iter().all(Run::invariants_hold), "invariants");
+}
+
+/// The lab's world: what holds today, which the estimator's rework must
+/// keep. Measured: median rms 2.2 mm, worst run's rms 2.4 mm, no
+/// collision, row steps and the box kept. The standstill invariant is
+/// broken today in 18 of the 20 runs (the estimate moves up to 22 mm
+/// while the servos stand still: re-acquisition and lidar corrections
+/// at a stop); printed, asserted only by the ignored test above until the
+/// estimator's rework.
+#[test]
+fn lab_world_laps_keep_their_figures() {
+    let (median, worst, runs) = world("lab", Realism::LAB);
+    assert!(median <= 5.0, "median rms {median:.1} mm");
+    assert!(worst <= 10.0, "worst rms {worst:.1} mm");
+    assert!(runs.iter().all(|r| r.located && r.collisions == 0), "never located, or collisions");
+    assert!(runs.iter().all(|r| r.step_excess_mm <= STEP_SLACK_MM && r.outside_mm == 0.0), "row steps, box");
+}

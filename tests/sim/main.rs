@@ -1,0 +1,11 @@
+//! The simulator and long simulated drives.
+// Test code: a panic fails the test (the robot's lints, Cargo.toml).
+#![allow(clippy::restriction)]
+
+#[path = "../common/mod.rs"]
+mod common;
+
+mod hard_world;
+mod realism;
+mod realistic_hour;
+mod simulate;
