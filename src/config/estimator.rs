@@ -104,9 +104,12 @@ pub const TURN_SCALE_SIGMA: f64 = 0.4;
 /// square root of a second of the motion it scales (one sigma).
 pub const SCALE_WALK_PER_SQRT_S: f64 = 0.01;
 /// The scales are kept within these bounds (a projection after every
-/// correction; the covariance is left alone).
-pub const SCALE_MIN: f64 = 0.3;
-pub const SCALE_MAX: f64 = 3.0;
+/// correction; the covariance is left alone): issue 29's 0.6-1.8 with a
+/// margin. Below half its line a turn is a wheel held (against a wall),
+/// not a scale: the compass's disagreement then starts a re-search instead
+/// of teaching the filter a turn rate it will not see again.
+pub const SCALE_MIN: f64 = 0.5;
+pub const SCALE_MAX: f64 = 2.5;
 /// The compass's bias (a heading offset from desks, walls, the floor's
 /// iron): unknown at the start within this, degrees one sigma.
 pub const COMPASS_BIAS_SIGMA_DEG: f64 = 10.0;

@@ -82,9 +82,28 @@ impl Covariance {
         self.set(i, j, self.get(i, j).saturating_add(v));
     }
 
+    /// Row `r` (`P_rk` for every `k`), walked by its packed indices.
+    // tick bar: inlined (a returned array is a memset and a memcpy call)
+    #[inline(always)]
+    pub(super) fn row(&self, r: usize) -> [i32; N] {
+        let mut out = [0; N];
+        let mut idx = r; // index(0, r)
+        for (k, o) in out.iter_mut().enumerate() {
+            *o = self.upper.get(idx).copied().unwrap_or(0);
+            idx += step(k, r);
+        }
+        out
+    }
+
     /// The diagonal, Q12 mm^2.
     pub fn diagonal(&self) -> [i32; N] {
-        core::array::from_fn(|i| self.get(i, i))
+        let mut d = [0; N];
+        let mut ii = 0;
+        for (i, di) in d.iter_mut().enumerate() {
+            *di = self.upper.get(ii).copied().unwrap_or(0);
+            ii += N - i;
+        }
+        d
     }
 
     /// Zeroes row and column `i` but the diagonal (the state is taken as
@@ -97,68 +116,129 @@ impl Covariance {
         }
     }
 
-    /// `M P M^T` for `M = I + f e_i e_j^T` (`i != j`): the prediction's
-    /// Jacobian is a product of such shears (state `i` moves by `f` times
-    /// state `j`), `f` in Q30 with `|f| <= 2^29` (clamped; the callers'
-    /// factors are far below). New row `i`: `P_ik + f P_jk`; new `P_ii`:
-    /// `P_ii + f P_ij + f (new P_ij)`. Entries at most 2^28 (conditioned)
-    /// stay below 2^30.
-    pub(super) fn shear(&mut self, i: usize, j: usize, f: i32) {
-        let f = f.clamp(-(1 << 29), 1 << 29);
-        let pij = self.get(i, j);
+    /// `M P M^T` for `M = I + fa e_i e_a^T + fb e_i e_b^T` (`i` not `a`, `b`):
+    /// the prediction's Jacobian is a product of such shears (state `i`
+    /// moves by `fa` times state `a` and `fb` times state `b`), the factors
+    /// in Q30 with `|f| <= 2^29` (clamped; the callers' are far below). New
+    /// row `i`: `P_ik + fa P_ak + fb P_bk`; new `P_ii`: `P_ii + fa P_ia + fb
+    /// P_ib + fa (new P_ia) + fb (new P_ib)`. Entries at most 2^28
+    /// (conditioned) stay below 2^30.
+    // tick bar: row `i`, `a` and `b` walked by their packed indices (no
+    // index arithmetic per entry)
+    pub(super) fn shear(&mut self, i: usize, (a, fa): (usize, i32), (b, fb): (usize, i32)) {
+        let (fa, fb) = (fa.clamp(-(1 << 29), 1 << 29), fb.clamp(-(1 << 29), 1 << 29));
+        let (pia, pib) = (self.get(i, a), self.get(i, b));
+        let (mut ri, mut ra, mut rb) = (i, a, b); // index(0, i), index(0, a), index(0, b)
         for k in 0..N {
             if k != i {
-                self.add(i, k, mul_q30_fine(self.get(j, k), f));
+                let pak = self.upper.get(ra).copied().unwrap_or(0);
+                let pbk = self.upper.get(rb).copied().unwrap_or(0);
+                if let Some(e) = self.upper.get_mut(ri) {
+                    *e = e.saturating_add(mul_q30_fine(pak, fa)).saturating_add(mul_q30_fine(pbk, fb));
+                }
             }
+            ri += step(k, i);
+            ra += step(k, a);
+            rb += step(k, b);
         }
-        let ii = mul_q30_fine(pij, f).saturating_add(mul_q30_fine(self.get(i, j), f));
+        let ii = mul_q30_fine(pia, fa)
+            .saturating_add(mul_q30_fine(pib, fb))
+            .saturating_add(mul_q30_fine(self.get(i, a), fa))
+            .saturating_add(mul_q30_fine(self.get(i, b), fb));
         self.add(i, i, ii);
     }
 
     /// Adds `v g g^T` on the states `idx` (`g` in Q30, `|g_i| <= 1`, `v >= 0`
     /// below 2^30): a motion's noise along one direction.
     pub(super) fn add_outer<const M: usize>(&mut self, v: i32, idx: [usize; M], g: [i32; M]) {
-        for (a, (&i, &gi)) in idx.iter().zip(g.iter()).enumerate() {
-            for (&j, &gj) in idx.iter().zip(g.iter()).skip(a) {
+        let mut a = 0;
+        while a < M {
+            let (i, gi) = (idx.get(a).copied().unwrap_or(N), g.get(a).copied().unwrap_or(0));
+            let mut b = a;
+            while b < M {
+                let (j, gj) = (idx.get(b).copied().unwrap_or(N), g.get(b).copied().unwrap_or(0));
                 self.add(i, j, mul_q30_fine(v, mul_q30(gi, gj)));
+                b += 1;
+            }
+            a += 1;
+        }
+    }
+
+    /// A correction's removal, `P_ij -= mul_hi(t_i, beta_j) 2^e` over the
+    /// upper triangle in its packed order (saturating, [`shift`]; see
+    /// `Filter::correct`); the diagonal's products from `|t|`, `|beta|`.
+    // tick bar: the packed array walked in order
+    pub(super) fn remove_outer(&mut self, t: &[i32; N], beta: &[i32; N], e: i32) {
+        let (mut i, mut j) = (0usize, 0usize);
+        for pij in self.upper.iter_mut() {
+            let (ti, bj) = (t.get(i).copied().unwrap_or(0), beta.get(j).copied().unwrap_or(0));
+            let d = if i == j { mul_hi(ti.abs(), bj.abs()) } else { mul_hi(ti, bj) };
+            *pij = pij.saturating_sub(shift(d, e));
+            j += 1;
+            if j == N {
+                i += 1;
+                j = i;
             }
         }
     }
 
-    /// One entry's part of a correction, `P_ij -= mul_hi(t_i, beta_j) 2^e`
-    /// (saturating, [`shift`]; see `Filter::correct`).
-    #[inline(always)]
-    pub(super) fn remove(&mut self, i: usize, j: usize, ti: i32, bj: i32, e: i32) {
-        self.set(i, j, self.get(i, j).saturating_sub(shift(mul_hi(ti, bj), e)));
+    /// The diagonal's upkeep (after a prediction: a congruence and noise
+    /// keep the correlations valid): a variance past the cap scales its row
+    /// and column by 1/2 (`D P D`, still PSD), one under the floor is raised.
+    pub(super) fn condition_diagonal(&mut self) {
+        let mut ii = 0; // index(i, i)
+        for i in 0..N {
+            let pii = self.upper.get(ii).copied().unwrap_or(P_MIN);
+            if pii > P_MAX {
+                self.halve(i);
+            }
+            if let Some(e) = self.upper.get_mut(ii) {
+                *e = (*e).max(P_MIN);
+            }
+            ii += N - i;
+        }
     }
 
-    /// Keeps the covariance valid (see the module docs): a variance past
-    /// the cap scales its row and column by 1/2 (`D P D`, still PSD), one
-    /// under the floor is raised, a correlation past 1 is clamped. Returns
+    /// Row and column `i` by 1/2 (the diagonal by 1/4): rare, out of line.
+    #[cold]
+    #[inline(never)]
+    fn halve(&mut self, i: usize) {
+        for k in 0..N {
+            let v = self.get(i, k);
+            self.set(i, k, if k == i { v >> 2 } else { v >> 1 });
+        }
+    }
+
+    /// Keeps the covariance valid (see the module docs, after a correction):
+    /// the diagonal's upkeep, then a correlation past 1 is clamped. Returns
     /// the number of clamps (repairs).
     pub(super) fn condition(&mut self) -> u32 {
-        for i in 0..N {
-            if self.get(i, i) > P_MAX {
-                for k in 0..N {
-                    let v = self.get(i, k);
-                    self.set(i, k, if k == i { v >> 2 } else { v >> 1 });
-                }
+        self.condition_diagonal();
+        let d = self.diagonal();
+        let (mut i, mut j, mut repairs) = (0usize, 0usize, 0u32);
+        for pij in self.upper.iter_mut() {
+            if i != j {
+                let (pii, pjj) = (d.get(i).copied().unwrap_or(P_MIN), d.get(j).copied().unwrap_or(P_MIN));
+                repairs += bound_correlation(pij, pii, pjj);
             }
-            self.set(i, i, self.get(i, i).max(P_MIN));
-        }
-        let mut repairs = 0;
-        for i in 0..N {
-            let pii = self.get(i, i);
-            for j in i + 1..N {
-                let mut pij = self.get(i, j);
-                let r = bound_correlation(&mut pij, pii, self.get(j, j));
-                if r != 0 {
-                    self.set(i, j, pij);
-                    repairs += r;
-                }
+            j += 1;
+            if j == N {
+                i += 1;
+                j = i;
             }
         }
         repairs
+    }
+}
+
+/// How far the packed index of `P_k,r` moves from `k` to `k + 1` (row `r`
+/// read down its column above the diagonal, then along its row).
+#[inline(always)]
+fn step(k: usize, r: usize) -> usize {
+    if k < r {
+        N - k - 1
+    } else {
+        1
     }
 }
 
@@ -246,7 +326,7 @@ mod tests {
         }
         let f = -(3 << 27); // -0.375
         let mut q = p;
-        q.shear(X, T, f);
+        q.shear(X, (T, f), (SPEED, 0));
         let ff = f as f64 / (1u64 << 30) as f64;
         for i in 0..N {
             for j in 0..N {

@@ -77,8 +77,7 @@ impl Filter {
 
     /// Moves the pose by `motion` (the lines' motion, scaled by this
     /// hypothesis's scales) held for `dt` and grows the uncertainty.
-    /// Returns the repairs the conditioning made.
-    pub(super) fn predict(&mut self, motion: Motion, dt: Dt, bounds: &Bounds) -> u32 {
+    pub(super) fn predict(&mut self, motion: Motion, dt: Dt, bounds: &Bounds) {
         let scaled = self.scales.apply(motion);
         let dt_us = dt.as_micros();
         let p = &mut self.p;
@@ -93,10 +92,8 @@ impl Filter {
                 let d = v.distance_q24(dt);
                 // F: dx/d(L theta) = -d s / L (Q30: mul_hi(d Q24, s Q30), as
                 // 2^30 / (2^22 * 256) = 1), and dx/d(L scale) = d0 c / L alike.
-                p.shear(X, T, -mul_hi(d, s));
-                p.shear(Y, T, mul_hi(d, c));
-                p.shear(X, SPEED, mul_hi(d0, c));
-                p.shear(Y, SPEED, mul_hi(d0, s));
+                p.shear(X, (T, -mul_hi(d, s)), (SPEED, mul_hi(d0, c)));
+                p.shear(Y, (T, mul_hi(d, c)), (SPEED, mul_hi(d0, s)));
                 // Q: distance noise along (c, s), heading drift, the bias's
                 // walk over the floor, the scale's drift.
                 let ad = d0.wrapping_abs(); // |d0| < 2^31 (above): no wrap
@@ -129,11 +126,9 @@ impl Filter {
                 let scale = if w0.to_bits() >= 0 { CW } else { CCW };
                 // x and y read the heading and the scale before the heading
                 // moves (the shears compose to I + F's off-diagonal part)
-                p.shear(X, T, f1);
-                p.shear(Y, T, f2);
-                p.shear(X, scale, crate::math::mul_q30(a_rad, g1));
-                p.shear(Y, scale, crate::math::mul_q30(a_rad, g2));
-                p.shear(T, scale, a_rad);
+                p.shear(X, (T, f1), (scale, crate::math::mul_q30(a_rad, g1)));
+                p.shear(Y, (T, f2), (scale, crate::math::mul_q30(a_rad, g2)));
+                p.shear(T, (scale, a_rad), (BIAS, 0));
                 // Q: the turned angle's noise along G; the pivot's across the
                 // car (unit (-s1, c1)); the scale's drift.
                 // (per angle turned: |turned| <= 2^31, the factors below
@@ -152,11 +147,12 @@ impl Filter {
         p.add(Y, Y, fp);
         p.add(T, T, (FLOOR_HEADING.wrapping_mul(dt_us) >> 16) as i32);
         p.add(BIAS, BIAS, (BIAS_WALK.wrapping_mul(dt_us) >> 16) as i32);
-        let repairs = p.condition();
+        // (a congruence and noise keep the correlations valid: the diagonal's
+        // upkeep only; the long-run test checks P positive definite every tick)
+        p.condition_diagonal();
         if motion != Motion::Stop {
             self.keep_in(bounds);
         }
-        repairs
     }
 
     /// Keeps the position within the bounds, to the whole mm (a projection

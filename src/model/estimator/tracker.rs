@@ -52,11 +52,9 @@ impl Estimator {
     /// Moves every hypothesis and the reported pose by `motion` for `dt`.
     pub(super) fn predict_all(&mut self, motion: Motion, dt: Dt) {
         let bounds = self.bounds;
-        let mut repairs = 0u32;
         for (h, _) in self.live_mut() {
-            repairs = repairs.saturating_add(h.predict(motion, dt, &bounds));
+            h.predict(motion, dt, &bounds);
         }
-        self.stats.repairs = self.stats.repairs.saturating_add(repairs);
         // the travel: |d| for a straight step, the arc at 100 mm for a turn
         let travel = match motion {
             Motion::Stop => 0,
@@ -81,11 +79,13 @@ impl Estimator {
     }
 
     /// Whether a reading of `sensor` counts as new evidence (the robot moved
-    /// far enough since its last counted one); if so it is the last.
+    /// far enough since its last counted one); if so it is the last. While
+    /// `Unknown` every reading counts: a typed guess does not hold against
+    /// the sensors.
     fn counts(&mut self, sensor: Sensor) -> bool {
-        let odometer = self.odometer;
+        let (odometer, unknown) = (self.odometer, self.tracking == Tracking::Unknown);
         let e = self.evidence_of(sensor);
-        let new = e.fresh || odometer.wrapping_sub(e.counted_at) >= EVIDENCE_Q16;
+        let new = unknown || e.fresh || odometer.wrapping_sub(e.counted_at) >= EVIDENCE_Q16;
         if new {
             e.counted_at = odometer;
             e.fresh = false;
@@ -124,7 +124,7 @@ impl Estimator {
             }
         }
         self.stats.repairs = self.stats.repairs.saturating_add(repairs);
-        if self.disagreed(Sensor::of(which), result, possible, counted) {
+        if self.disagreed(Sensor::of(which), result, possible && counted) {
             self.research_lidar(Disagreement { which, distance });
         }
         self.settle();
@@ -147,7 +147,7 @@ impl Estimator {
             }
         }
         self.stats.repairs = self.stats.repairs.saturating_add(repairs);
-        if self.disagreed(Sensor::Compass, result, true, counted) {
+        if self.disagreed(Sensor::Compass, result, counted) {
             self.research_compass(heading);
         }
         self.settle();
@@ -155,13 +155,18 @@ impl Estimator {
     }
 
     /// Counts a disagreement of `sensor` with the best hypothesis (only
-    /// readings that count as new evidence, and could come from the arena);
-    /// true when the run reaches [`cfg::RESEARCH_AFTER`] (and restarts it).
-    fn disagreed(&mut self, sensor: Sensor, result: Update, possible: bool, counted: bool) -> bool {
+    /// readings that count as new evidence and could come from the arena:
+    /// `counts`); true when the run reaches [`cfg::RESEARCH_AFTER`] (and
+    /// restarts it), or at once for a standing robot (its one piece of
+    /// evidence until it moves: the new hypotheses are weighed on every
+    /// sensor's next reading, and a spurious reading's is refuted there).
+    fn disagreed(&mut self, sensor: Sensor, result: Update, counts: bool) -> bool {
+        let standing = self.standing;
         let e = self.evidence_of(sensor);
         match result {
             Update::Accepted => e.disagreements = 0,
-            Update::Outlier if possible && counted => e.disagreements = e.disagreements.saturating_add(1),
+            Update::Outlier if counts && standing => e.disagreements = cfg::RESEARCH_AFTER,
+            Update::Outlier if counts => e.disagreements = e.disagreements.saturating_add(1),
             _ => {}
         }
         if e.disagreements >= cfg::RESEARCH_AFTER {
@@ -200,8 +205,8 @@ impl Estimator {
     }
 
     /// A local re-search for a compass that keeps disagreeing: either the
-    /// heading is lost (a copy with the heading as uncertain as kept, taking
-    /// the reading) or the compass's bias moved (a copy with the bias as
+    /// heading is lost (a copy with the heading as uncertain as kept and the
+    /// position by `cfg::RESEARCH_SIGMA_MM`, taking the reading) or the compass's bias moved (a copy with the bias as
     /// uncertain, taking it). The lidars decide between them and the best.
     #[cold]
     #[inline(never)]
@@ -214,6 +219,14 @@ impl Estimator {
             // the correction takes the reading
             h.p.set(state, state, P_MAX);
             h.p.decouple(state);
+            if state == T {
+                // what lost the heading (a held turn, the skid) moved the
+                // position too: the lidars then place it afresh
+                for axis in [X, Y] {
+                    h.p.set(axis, axis, h.p.get(axis, axis).max(P_RESEARCH));
+                    h.p.decouple(axis);
+                }
+            }
             h.correct(row, nu, R_COMPASS, &bounds);
             self.spawn(h);
         }
@@ -238,6 +251,8 @@ impl Estimator {
         if let (Some(f), Some(c)) = (self.hyps.get_mut(slot), self.costs.get_mut(slot)) {
             (*f, *c) = (h, cost);
         }
+        // a new hypothesis is weighed on every sensor's next reading
+        self.evidence = super::EvidenceSet::FRESH;
         self.stats.spawned = self.stats.spawned.saturating_add(1);
     }
 
@@ -332,22 +347,29 @@ impl Estimator {
     /// while one hypothesis dominates it moves toward it by at most the
     /// slack saved up (per axis); while ambiguous it only dead-reckons.
     pub(super) fn follow(&mut self) {
-        let best = *self.best_filter();
+        // tick bar: the best pose's fields, not a copy of the pose (a memcpy call)
+        let (best, best_x, best_y) = (self.best, self.best_filter().pose.x, self.best_filter().pose.y);
         match self.tracking {
-            Tracking::Unknown => self.reported = best.pose,
+            Tracking::Unknown => {
+                if let Some(h) = self.hyps.get(best) {
+                    self.reported = h.pose;
+                }
+            }
             Tracking::Ambiguous if !self.dominant => {}
             Tracking::Ambiguous | Tracking::Located => {
+                // (max/min, not clamp: clamp's panic for bounds the wrong way
+                // round would reach the image)
                 let toward = |c: Coord, to: Coord, most: i32| -> i32 {
-                    let d = (to.0.wrapping_sub(c.0) >> 16).clamp(-i64::from(most), i64::from(most));
-                    d as i32
+                    let most = i64::from(most.max(0));
+                    (to.0.wrapping_sub(c.0) >> 16).max(-most).min(most) as i32
                 };
-                let sx = toward(self.reported.x, best.pose.x, self.slack);
-                let sy = toward(self.reported.y, best.pose.y, self.slack);
+                let sx = toward(self.reported.x, best_x, self.slack);
+                let sy = toward(self.reported.y, best_y, self.slack);
                 self.reported.x = Coord(self.reported.x.0.wrapping_add(i64::from(sx) << 16));
                 self.reported.y = Coord(self.reported.y.0.wrapping_add(i64::from(sy) << 16));
                 self.slack = self.slack.saturating_sub(sx.saturating_abs().max(sy.saturating_abs()));
-                self.reported.theta = best.pose.theta;
-                self.reported.theta_frac = best.pose.theta_frac;
+                let b = &self.best_filter().pose;
+                (self.reported.theta, self.reported.theta_frac) = (b.theta, b.theta_frac);
             }
         }
         // a located (or ambiguous) robot is inside the box; a typed pose

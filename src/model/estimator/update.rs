@@ -176,12 +176,7 @@ impl Filter {
         // than exact arithmetic would.
         let ep = ns as i32 - 2 * sb as i32 + 2 + k as i32;
         let beta: [i32; N] = core::array::from_fn(|i| b.get(i).copied().unwrap_or(0) << sb); // |beta| < 2^30
-        for (i, (&ti, &bi)) in t.iter().zip(beta.iter()).enumerate() {
-            self.p.remove(i, i, ti.abs(), bi.abs(), ep);
-            for (j, &bj) in beta.iter().enumerate().skip(i + 1) {
-                self.p.remove(i, j, ti, bj, ep);
-            }
-        }
+        self.p.remove_outer(&t, &beta, ep);
         let repairs = self.p.condition();
         self.keep_in(bounds);
         (Outcome { update: Update::Accepted, nis_q8, nu }, repairs)
@@ -244,20 +239,17 @@ const THETA_MAX: i32 = (1 << 19) - 1;
 /// exact; `k <= 8`). Then `|b| < 2^27` and `|H P H^T| < 2^30`.
 #[inline(always)]
 fn project(p: &Covariance, h: Row) -> ([i32; N], i32, u32) {
-    let mag = (0..N).fold(0u32, |m, i| m | p.get(h.unit, i).unsigned_abs() | p.get(h.lever, i).unsigned_abs());
+    let (unit, lever) = (p.row(h.unit), p.row(h.lever));
+    let mag = unit.iter().chain(lever.iter()).fold(0u32, |m, v| m | v.unsigned_abs());
     let k = scale_shift(mag);
     // |P >> k| < 2^23, so << 8 < 2^31; |coef| < 2^19, << 8 < 2^27: mul_hi
     // gives P coef / 2^16, below 2^26 (+ 3 LSB of rounding); |b| < 2^27.
     let c8 = h.coef << 8;
-    let b: [i32; N] = core::array::from_fn(|i| {
-        let lever = mul_hi((p.get(h.lever, i) >> k) << 8, c8);
-        let unit = p.get(h.unit, i) >> k;
-        if h.positive {
-            lever + unit
-        } else {
-            lever - unit
-        }
-    });
+    let mut b = [0i32; N];
+    for ((bi, &l), &u) in b.iter_mut().zip(lever.iter()).zip(unit.iter()) {
+        let (l, u) = (mul_hi((l >> k) << 8, c8), u >> k);
+        *bi = if h.positive { l + u } else { l - u };
+    }
     // H b = +-b_unit + coef b_lever / 2^16: b << 4 < 2^31, coef << 12 < 2^31,
     // the product below 9 2^26; the sum below 81 2^23 < 2^30.
     let bu = b.get(h.unit).copied().unwrap_or(0);
