@@ -45,7 +45,7 @@ const fn index(i: usize, j: usize) -> usize {
 ///
 /// Why Q12 (issue 29): in Q14 the compass's variance had to stay below
 /// 2^22 (3.6 degrees one sigma) and a turn's pivot noise below 2^30 (18 mm);
-/// in Q12 with [`P_MAX`] at 2^28 a measurement noise up to `P_MAX` (57
+/// in Q12 with `P_MAX` at 2^28 a measurement noise up to `P_MAX` (57
 /// degrees, 256 mm) fits a correction's 32-bit `S`, and the pivot's noise
 /// is its own term (`constants::K_PIVOT`, 45 mm asserted to fit). The
 /// floor, 0.1 mm, is still 41 LSB.
