@@ -134,6 +134,11 @@ pub const MAX_HYPOTHESES: usize = 4;
 /// sensor's last counted reading: ten readings of a standing robot are one
 /// piece of evidence, not ten.
 pub const EVIDENCE_TRAVEL_MM: f64 = 10.0;
+/// And once this long has passed since that sensor's last counted reading,
+/// seconds, moving or not: a body can move while its servos stand (a
+/// trimmed neutral creeps, a hand turns it; `tests/soak.rs` does both), and
+/// the sensors must win then too, slowly.
+pub const EVIDENCE_PERIOD_S: f64 = 1.0;
 /// Cost (a sum of normalised squared innovations) a reading the gate
 /// rejects adds to a hypothesis: more than the gate's square, so a
 /// hypothesis that explains a reading always beats one that does not.
@@ -153,8 +158,10 @@ pub const SPAWN_COST: f64 = 4.0;
 /// follows at the catch-up's pace.
 pub const LOCATED_SIGMA_MM: f64 = 30.0;
 /// Counted disagreements (outliers of one sensor, each after the robot
-/// moved `EVIDENCE_TRAVEL_MM`) after which the best hypothesis is
-/// re-searched locally: a new hypothesis takes the sensor's side.
+/// moved `EVIDENCE_TRAVEL_MM` or `EVIDENCE_PERIOD_S` passed) after which the
+/// best hypothesis is re-searched locally: a new hypothesis takes the
+/// sensor's side. While the servos stand still one is enough (it is all
+/// the evidence a standing robot gets for a second).
 pub const RESEARCH_AFTER: u8 = 3;
 /// A lidar's re-search: the new hypothesis's position uncertainty, one
 /// sigma per axis, mm, before it takes the reading.

@@ -113,6 +113,8 @@ pub(super) const SPAWN_Q8: i32 = to_i32(cfg::SPAWN_COST * 256.0);
 pub(super) const LOCATED_VAR: i32 = to_i32(cfg::LOCATED_SIGMA_MM * cfg::LOCATED_SIGMA_MM * Q12);
 /// Travel (Q16 mm) a reading needs since its sensor's last counted one.
 pub(super) const EVIDENCE_Q16: i32 = to_i32(cfg::EVIDENCE_TRAVEL_MM * 65536.0);
+/// The evidence period, microseconds.
+pub(super) const EVIDENCE_PERIOD_US: u32 = to_u32(cfg::EVIDENCE_PERIOD_S * 1e6);
 /// Merging: mm Q16 and angle LSB.
 pub(super) const MERGE_Q16: i32 = to_i32(cfg::MERGE_MM * 65536.0);
 pub(super) const MERGE_LSB: i32 = to_i32(cfg::MERGE_DEG / 360.0 * 4_294_967_296.0);

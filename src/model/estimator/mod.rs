@@ -41,7 +41,8 @@
 //!   (its normalised squared innovation, [`cfg::OUTLIER_COST`] when gated
 //!   out) - but only readings that are new evidence: a sensor's reading
 //!   counts once the robot has moved [`cfg::EVIDENCE_TRAVEL_MM`] since that
-//!   sensor's last counted one. Ten readings of a standing robot are one.
+//!   sensor's last counted one, or [`cfg::EVIDENCE_PERIOD_S`] has passed.
+//!   Ten readings of a standing robot are one.
 //! - A sensor whose counted readings disagree with the best hypothesis
 //!   [`cfg::RESEARCH_AFTER`] times in a row (so: while the robot moves)
 //!   triggers a local re-search: a new hypothesis takes the sensor's side
@@ -258,7 +259,7 @@ struct EvidenceSet {
 
 impl EvidenceSet {
     const FRESH: EvidenceSet = {
-        let e = tracker::Evidence { counted_at: 0, fresh: true, disagreements: 0 };
+        let e = tracker::Evidence { counted_at: 0, counted_us: 0, fresh: true, disagreements: 0 };
         EvidenceSet { front: e, right: e, compass: e }
     };
 }
@@ -283,6 +284,8 @@ pub struct Estimator {
     standing: bool,
     /// Travel so far, Q16 mm (wrapping): straight distance plus turns' arcs.
     odometer: i32,
+    /// Time predicted so far, us (wrapping).
+    clock_us: u32,
     evidence: EvidenceSet,
     arena: Arena,
     /// Where the hypotheses' positions are kept (the arena and its margin).
@@ -323,6 +326,7 @@ impl Estimator {
             slack: 0,
             standing: true,
             odometer: 0,
+            clock_us: 0,
             evidence: EvidenceSet::FRESH,
             arena,
             bounds,

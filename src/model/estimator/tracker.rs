@@ -7,7 +7,8 @@
 
 use super::constants::{
     AMBIGUOUS_GAP_Q16, CATCH_UP_MAX_Q16, CATCH_UP_PER_MM_Q16, CATCH_UP_PER_US, CATCH_UP_STANDING_Q16, DOMINATE_Q8,
-    EVIDENCE_Q16, LOCATED_VAR, MERGE_LSB, MERGE_Q16, OUTLIER_COST_Q8, PRUNE_Q8, P_MAX, P_RESEARCH, R_COMPASS, SPAWN_Q8,
+    EVIDENCE_PERIOD_US, EVIDENCE_Q16, LOCATED_VAR, MERGE_LSB, MERGE_Q16, OUTLIER_COST_Q8, PRUNE_Q8, P_MAX, P_RESEARCH,
+    R_COMPASS, SPAWN_Q8,
 };
 use super::covariance::{BIAS, T, X, Y};
 use super::predict::Filter;
@@ -24,11 +25,13 @@ use crate::model::state::advance;
 /// times 2^32 / 2^6 (the `<< 6` after): 100 2 pi 2^10.
 const TURN_TRAVEL: i32 = 643_398;
 
-/// One sensor's evidence: the odometer when its last reading counted, and
+/// One sensor's evidence: the odometer and clock when its last reading counted, and
 /// its counted disagreements with the best hypothesis in a row.
 #[derive(Clone, Copy, PartialEq, Eq, Hash, Debug, Default)]
 pub(super) struct Evidence {
     pub counted_at: i32,
+    /// The estimator's clock then, us.
+    pub counted_us: u32,
     pub fresh: bool,
     pub disagreements: u8,
 }
@@ -62,6 +65,7 @@ impl Estimator {
             Motion::Turn(w) => mul_hi((w.rotation(dt).0 .0 as i32).wrapping_abs(), TURN_TRAVEL) << 6,
         };
         self.odometer = self.odometer.wrapping_add(travel);
+        self.clock_us = self.clock_us.wrapping_add(dt.as_micros());
         let scales = self.best_filter().scales;
         advance(&mut self.reported, scales.apply(motion), dt);
         if motion == Motion::Stop {
@@ -79,16 +83,19 @@ impl Estimator {
     }
 
     /// Whether a reading of `sensor` counts as new evidence (the robot moved
-    /// far enough since its last counted one); if so it is the last. While
+    /// far enough since its last counted one, or long enough passed); if so
+    /// it is the last. While
     /// `Unknown` every reading counts: a typed guess does not hold against
     /// the sensors.
     fn counts(&mut self, sensor: Sensor) -> bool {
-        let (odometer, unknown) = (self.odometer, self.tracking == Tracking::Unknown);
+        let (odometer, clock, unknown) = (self.odometer, self.clock_us, self.tracking == Tracking::Unknown);
         let e = self.evidence_of(sensor);
-        let new = unknown || e.fresh || odometer.wrapping_sub(e.counted_at) >= EVIDENCE_Q16;
+        let new = unknown
+            || e.fresh
+            || odometer.wrapping_sub(e.counted_at) >= EVIDENCE_Q16
+            || clock.wrapping_sub(e.counted_us) >= EVIDENCE_PERIOD_US;
         if new {
-            e.counted_at = odometer;
-            e.fresh = false;
+            (e.counted_at, e.counted_us, e.fresh) = (odometer, clock, false);
         }
         new
     }
