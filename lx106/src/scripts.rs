@@ -17,7 +17,7 @@ use paperbot::control::{Controller, Hardware, LineSink};
 use paperbot::driver::{CompassSample, HeadingSensor, LidarSample, MagCalibrate, RangeSensor, SensorError, Servos};
 use paperbot::math::{Angle, Dt, Length, Speed, TurnRate};
 use paperbot::model::compass::{MagCalibration, MagCounts, MagField};
-use paperbot::model::estimator::{Covariance, Estimator, Update};
+use paperbot::model::estimator::{Estimator, Update, N};
 use paperbot::model::measurement::{expected_heading, expected_lidar, Arena, LidarId};
 use paperbot::model::{step, Motion, Pose, ServoCmd};
 
@@ -51,8 +51,29 @@ fn fnv_i64(h: u32, v: i64) -> u32 {
     fnv(h, &v.to_le_bytes())
 }
 
-pub fn cov_array(p: &Covariance) -> [i32; 6] {
-    [p.xx, p.xy, p.xt, p.yy, p.yt, p.tt]
+/// The estimator's bits beyond the reported pose: the best hypothesis's
+/// covariance diagonal, and an FNV-1a hash of its whole covariance, pose,
+/// scales and bias, the tracking state and the costs of every hypothesis.
+pub fn cov_array(est: &Estimator) -> [i32; N + 1] {
+    let p = est.covariance();
+    let mut h = FNV0;
+    for i in 0..N {
+        for j in i..N {
+            h = fnv_i64(h, i64::from(p.get(i, j)));
+        }
+    }
+    let b = est.best_pose();
+    let s = est.scales();
+    for v in [b.x.0, b.y.0, i64::from(b.theta.0), i64::from(s.speed), i64::from(s.cw), i64::from(s.ccw)] {
+        h = fnv_i64(h, v);
+    }
+    h = fnv_i64(h, i64::from(est.compass_bias().0));
+    h = fnv(h, &[est.tracking() as u8]);
+    for (_, cost) in est.hypotheses() {
+        h = fnv_i64(h, i64::from(cost));
+    }
+    let d = p.diagonal();
+    [d[0], d[1], d[2], d[3], d[4], d[5], d[6], h as i32]
 }
 
 // ---------------------------------------------------------------- estimator
@@ -75,9 +96,9 @@ pub fn update_code(u: Option<Update>) -> u8 {
 /// The state after one estimator call: (kind, update code, the measurement
 /// model's expectation for the estimated pose before the call (`expected_lidar`
 /// bits, `i32::MIN` for none; `expected_heading` bits for the compass; 0 for
-/// predict), x, y, theta, theta_frac, covariance (xx, xy, xt, yy, yt, tt)).
+/// predict), x, y, theta, theta_frac of the reported pose, [`cov_array`]).
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
-pub struct EstRec(pub u8, pub u8, pub i32, pub i64, pub i64, pub u32, pub u16, pub [i32; 6]);
+pub struct EstRec(pub u8, pub u8, pub i32, pub i64, pub i64, pub u32, pub u16, pub [i32; N + 1]);
 
 /// One scripted run: start pose of the truth (mm, mm, deg), the estimator's
 /// initial error (mm, mm, deg), motion segments (motion, ticks) and the seed.
@@ -153,7 +174,7 @@ pub fn run_estimator(run: &EstRun, mut rec: impl FnMut(EstRec)) {
     let mut est = Estimator::new(Pose::from_mm(tx + ex, ty + ey, deg(tt + et)));
     let record = |kind: u8, u: Option<Update>, exp: i32, est: &Estimator, rec: &mut dyn FnMut(EstRec)| {
         let p = est.pose();
-        rec(EstRec(kind, update_code(u), exp, p.x.0, p.y.0, p.theta.0, p.theta_frac, cov_array(&est.covariance())))
+        rec(EstRec(kind, update_code(u), exp, p.x.0, p.y.0, p.theta.0, p.theta_frac, cov_array(est)))
     };
     let mut tick = 0u32;
     for &(mv, ticks) in run.segments {
@@ -416,7 +437,7 @@ pub fn run_control(mut rec: impl FnMut(TickRec), echo: &mut dyn FnMut(&str)) {
 
         let p = c.pose();
         let mut h = FNV0;
-        for v in cov_array(&c.estimator().covariance()) {
+        for v in cov_array(c.estimator()) {
             h = fnv_i64(h, i64::from(v));
         }
         let a = c.applied();

@@ -46,8 +46,8 @@ pub const MAX_LINE: usize = crate::config::serial::MAX_LINE;
 pub const MAX_RESPONSE: usize = 128;
 
 /// Longest status line from [`format_status`] (every field at its widest:
-/// 394 bytes).
-pub const MAX_STATUS: usize = 400;
+/// 409 bytes).
+pub const MAX_STATUS: usize = 416;
 
 /// A buffer of this size holds any line the protocol writes (telemetry row,
 /// response, status, help line).

@@ -154,6 +154,8 @@ pub struct RunResult {
     pub est: Vec<(f64, f64, f64)>,
     /// The same for dead reckoning.
     pub dr: Vec<(f64, f64, f64)>,
+    /// The same for the best hypothesis (the reported pose follows it).
+    pub best: Vec<(f64, f64, f64)>,
     pub injected_lidar_outliers: u32,
     pub injected_compass_outliers: u32,
     /// Per tick: (t, truth, commands, front reading, right reading, compass deg) for logs.
@@ -321,6 +323,7 @@ pub fn run(sc: &Scenario, mut observe: impl FnMut(f64, &Estimator, PoseF64)) -> 
             (t, ((x - truth.x).powi(2) + (y - truth.y).powi(2)).sqrt(), dth)
         };
         res.est.push(err(&est.pose()));
+        res.best.push(err(&est.best_pose()));
         res.poses.push(est.pose());
         res.dr.push(err(&dr));
         let sig = est.sigma();

@@ -88,9 +88,12 @@ fn a_million_ticks_of_random_commands() {
     println!("soak: {} checkpoints free of walls for 10 s, {stuck_checkpoints} not", s.errors.len());
     println!("soak: their error median {:.1} mm / {:.1} deg, 90 % {:.0} mm / {:.0} deg", q50.0, q50.1, q90.0, q90.1);
     // A body held at a wall while the loop drives on (17 % of the ticks
-    // here) leaves the estimate off; runs of outliers make the estimator
-    // take the sensors' side (`lost_heading_is_recovered` below) and the
-    // position is kept within `ARENA_MARGIN` of the box. Regression bounds,
+    // here) leaves the estimate off; disagreeing readings seed hypotheses
+    // on the sensors' side (issue 29; `lost_heading_is_recovered` below) and
+    // the position is kept within `ARENA_MARGIN` of the box. Measured with
+    // the multi-hypothesis estimator: median 3.4 mm / 1.5 deg, 90 % 24 mm /
+    // 7 deg, worst 146 mm / 24 deg (the figures below are the 3-state
+    // filter's). Regression bounds,
     // about twice the measured: at most 50.0 mm outside (the margin; 885-1006
     // mm before re-acquisition), free checkpoints' error median 2.4 mm /
     // 1.1 deg (was 5.5 mm / 1.5 deg), 90 % 19 mm / 6 deg (was 164 mm / 64
@@ -108,7 +111,7 @@ fn a_million_ticks_of_random_commands() {
     assert!(q90.0 < 40.0 && q90.1 < 12.0, "{q90:?}");
     assert!(s.worst_error_mm < 600.0 && s.worst_error_deg < 35.0, "{} {}", s.worst_error_mm, s.worst_error_deg);
     let st = c.estimator().stats();
-    assert!(st.compass.reacquired > 0 && st.front.reacquired > 0 && st.right.reacquired > 0, "{st:?}");
+    assert!(st.spawned > 0, "{st:?}");
 }
 
 /// A body held still while the loop drives on (a wheel against a wall)
@@ -162,9 +165,20 @@ fn lost_heading_is_recovered() {
         let (e_deg, e_mm) =
             (lost.estimate.heading_error(&lost.truth).to_degrees().abs(), lost.estimate.distance(&lost.truth));
         println!("{cmd}: estimate at release {e_deg:.0} deg / {e_mm:.0} mm");
-        // back within 5 degrees and 20 mm, and staying there for 10 s
+        // back within 5 degrees and 20 mm, and staying there to the end of
+        // 10 s. The robot turns back and forth once free (six turns of 0.8
+        // rad): standing, the lidars square on to their walls do not see
+        // the heading, and the compass reads the heading plus a bias it
+        // does not know (issue 29); and the held turn taught the filter that
+        // the car turns slowly (the turn-rate scale, as a slow real turn
+        // would), which the next turns unlearn.
         let mut back_at = None;
         for i in 0..1_000 {
+            match i {
+                10 | 210 | 410 => robot.send("ccw 1.0 0.8"),
+                110 | 310 | 510 => robot.send("cw 1.0 0.8"),
+                _ => {}
+            }
             robot.tick();
             let s = robot.sample();
             let ok =
@@ -178,7 +192,6 @@ fn lost_heading_is_recovered() {
         let st = robot.controller().estimator().stats();
         println!("{cmd} held {held} ticks: lost {deg:.0} deg / {mm:.0} mm, back after {back_at:?} ticks; {st:?}");
         let back_at = back_at.unwrap_or_else(|| panic!("{cmd}: not recovered in 10 s"));
-        assert!(back_at < 100, "{cmd}: recovered only after {back_at} ticks");
-        assert!(st.compass.reacquired + st.front.reacquired + st.right.reacquired > 0, "{st:?}");
+        assert!(back_at < 700, "{cmd}: recovered only after {back_at} ticks");
     }
 }

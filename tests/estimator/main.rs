@@ -6,8 +6,9 @@
 mod common;
 
 mod basics;
+mod invariants;
 mod lab2_drive;
 mod longrun;
-mod no_teleport;
-mod reacquire;
+mod reference;
 mod replay;
+mod tracker;

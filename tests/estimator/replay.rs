@@ -126,5 +126,9 @@ fn stopped_robot_stays_put_and_readings_pull_it_to_the_truth() {
     // the readings are rounded to whole mm: the model maps them within ~1 mm
     assert!((last.x.to_mm_f64() - 200.0).abs() < 1.5, "{}", last.x.to_mm_f64());
     assert!((last.y.to_mm_f64() - 150.0).abs() < 1.5, "{}", last.y.to_mm_f64());
-    assert!(wrap(last.theta.to_radians_f64()).abs() < 0.2f64.to_radians());
+    // the compass reads heading plus a bias the filter does not know (10
+    // degrees one sigma) and square-on lidars do not see the heading: it
+    // splits the 5 degrees between them
+    let th = wrap(last.theta.to_radians_f64()).to_degrees();
+    assert!(th.abs() < 2.0, "{th}");
 }

@@ -371,6 +371,13 @@ fn places_apart_are_weighted_clusters_and_the_fix_is_never_their_mean() {
         }
         several += 1;
         assert!(fix.ambiguous, "several places are ambiguous");
+        // the estimator starts with one hypothesis per place, none their mean
+        let mut est = paperbot::model::estimator::Estimator::new(fix.pose);
+        est.start_at(&fix);
+        let held: Vec<_> = est.hypotheses().map(|(p, _)| p).collect();
+        assert_eq!(held.len(), c.len().min(paperbot::config::estimator::MAX_HYPOTHESES), "{c:?}");
+        assert!(c.iter().all(|k| held.contains(&fix.pose_of(k))) || c.len() > held.len(), "{held:?}");
+        assert_ne!(est.tracking(), paperbot::model::estimator::Tracking::Located, "{c:?}");
         // places apart: no two together within the ambiguous span (else
         // they would be one place)
         let span = f64::from(config::locate::AMBIGUOUS_SPAN_MM);

@@ -16,6 +16,7 @@ use paperbot::control::protocol::{OutLine, Overflow};
 use paperbot::driver::{CompassSample, LidarSample};
 use paperbot::math::{Angle, Coord, Length, Speed, TurnRate};
 use paperbot::model::compass::{MagCounts, MagField};
+use paperbot::model::estimator::Tracking;
 use paperbot::model::{Motion, MotionKind, Pose, Range, ServoCmd, Trim};
 
 fn row_text(t: &Telemetry) -> std::string::String {
@@ -300,6 +301,7 @@ fn status_line() {
         motion: Motion::Straight(Speed::from_mm_s(130)),
         remaining_ms: Some(800),
         pose: Pose::from_mm(12, -3, Angle::QUARTER_TURN),
+        tracking: Tracking::Located,
         left_cmd: ServoCmd::from_int(107),
         right_cmd: ServoCmd::from_int(61),
         left_trim: Trim(0),
@@ -315,7 +317,7 @@ fn status_line() {
     assert_eq!(
         out.as_str(),
         "# status t_ms=1200 mode=drive motion=fwd v_mps=0.130 w_radps=0.000 left_ms=800 x_mm=12 y_mm=-3 \
-         heading_deg=90.000 left_cmd=107.00 right_cmd=61.00 trim_left=0.00 trim_right=-1.50 rate_hz=10 \
+         heading_deg=90.000 pose=located left_cmd=107.00 right_cmd=61.00 trim_left=0.00 trim_right=-1.50 rate_hz=10 \
          front=ok right=ok compass=down f_bus=3 f_timeout=0 f_missing=0 f_bad_sample=0 f_outliers=0 f_overruns=0"
     );
 
@@ -326,6 +328,7 @@ fn status_line() {
         motion: Motion::Turn(TurnRate::from_mrad_s(-20_000)),
         remaining_ms: Some(u32::MAX),
         pose: Pose::new(Coord(i64::MIN), Coord(i64::MIN), Angle(u32::MAX >> 1)),
+        tracking: Tracking::Ambiguous,
         left_cmd: ServoCmd::MAX,
         right_cmd: ServoCmd::MAX,
         left_trim: Trim(i16::MIN),

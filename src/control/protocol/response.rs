@@ -65,6 +65,8 @@ pub struct Status {
     /// Time left of a timed command, ms.
     pub remaining_ms: Option<u32>,
     pub pose: Pose,
+    /// How sure the estimator is of the pose (issue 29).
+    pub tracking: crate::model::estimator::Tracking,
     pub left_cmd: ServoCmd,
     pub right_cmd: ServoCmd,
     pub left_trim: Trim,
@@ -80,7 +82,7 @@ pub struct Status {
 
 /// Appends the status line (no terminator), `key=value` pairs:
 /// `# status t_ms=1200 mode=drive motion=fwd v_mps=0.130 w_radps=0.000 left_ms=800 x_mm=12 y_mm=-3
-/// heading_deg=90.000 left_cmd=107.00 right_cmd=61.00 trim_left=0.00 trim_right=-1.50 rate_hz=10
+/// heading_deg=90.000 pose=located left_cmd=107.00 right_cmd=61.00 trim_left=0.00 trim_right=-1.50 rate_hz=10
 /// front=ok right=ok compass=down f_bus=0 f_timeout=0 f_missing=0 f_bad_sample=0 f_outliers=0
 /// f_overruns=0` (one line; `left_ms` only for timed commands; the fault
 /// counters named as the telemetry columns). Fits in [`super::MAX_OUT_LINE`].
@@ -113,6 +115,8 @@ pub fn format_status(s: &Status, out: &mut dyn TextOut) -> Result<(), Overflow> 
     push_i32(out, s.pose.y.to_length().to_mm())?;
     push_str(out, " heading_deg=")?;
     push_fixed_parts(out, false, s.pose.theta.to_millidegrees(), 3)?;
+    push_str(out, " pose=")?;
+    push_str(out, s.tracking.word())?;
     push_str(out, " left_cmd=")?;
     push_fixed_parts(out, false, s.left_cmd.to_centi(), 2)?;
     push_str(out, " right_cmd=")?;

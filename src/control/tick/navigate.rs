@@ -45,10 +45,14 @@ impl<H: Hardware> Controller<H> {
         self.mode = Mode::Goto { nav, drive: self.model.stop(), timer };
     }
 
-    /// The estimate is good enough to steer by (`slack` times the config's
-    /// limits: 1 to start, 2 on the way, as the uncertainty breathes
-    /// between corrections).
+    /// The estimate is good enough to steer by: not ambiguous, and within
+    /// `slack` times the config's limits (1 to start, 2 on the way, as the
+    /// uncertainty breathes between corrections).
     pub(super) fn certain_enough(&self, slack: i32) -> Result<(), Refusal> {
+        // several hypotheses, none dominating: the pose holds, no steering by it
+        if self.estimator.tracking() == crate::model::estimator::Tracking::Ambiguous {
+            return Err(Refusal::Uncertain);
+        }
         let sigma = self.estimator.sigma();
         let heading = Angle::from_millidegrees(config::goto::MAX_SIGMA_MDEG.saturating_mul(slack));
         // a one-sigma heading is small and positive: compare the LSBs

@@ -95,6 +95,7 @@ impl<H: Hardware> Controller<H> {
             motion: self.applied.motion,
             remaining_ms,
             pose: self.estimator.pose(),
+            tracking: self.estimator.tracking(),
             left_cmd: self.applied.left,
             right_cmd: self.applied.right,
             left_trim: self.model.left_trim,

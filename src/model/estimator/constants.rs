@@ -1,93 +1,162 @@
 //! The filter's constants, evaluated by the compiler from the config (no
 //! float code reaches the robot), each in the fixed-point format its use
-//! needs, with the bounds the arithmetic relies on asserted at build time.
+//! needs, with the bounds the arithmetic relies on asserted at build time
+//! (the covariance is Q12 mm^2, see [`super::Covariance`]).
 
 use super::HEADING_LEVER_MM;
 use crate::config::estimator as cfg;
 use crate::config::geometry;
 
-pub(super) const Q14: f64 = 16384.0;
+/// One mm^2 in the covariance's format.
+pub(super) const Q12: f64 = 4096.0;
 pub(super) const TAU: f64 = core::f64::consts::TAU;
 pub(super) const L: f64 = HEADING_LEVER_MM as f64;
+const RAD_PER_DEG: f64 = TAU / 360.0;
 
 const fn to_i32(x: f64) -> i32 {
     crate::math::round_f64(x) as i32
 }
+const fn to_u32(x: f64) -> u32 {
+    crate::math::round_f64(x) as u32
+}
 use crate::math::cos_f64;
 
-/// Lidar variance, Q14 mm^2.
-pub(super) const R_LIDAR: i32 =
-    to_i32(cfg::LIDAR_SIGMA.0 as f64 / 65536.0 * (cfg::LIDAR_SIGMA.0 as f64 / 65536.0) * Q14);
-/// Compass variance in (L rad)^2, Q14 mm^2.
-pub(super) const R_COMPASS: i32 =
-    to_i32((cfg::COMPASS_SIGMA_DEG * TAU / 360.0 * L) * (cfg::COMPASS_SIGMA_DEG * TAU / 360.0 * L) * Q14);
+/// A one-sigma angle in degrees as a variance of `L dtheta`, Q12 mm^2.
+const fn angle_var(deg: f64) -> f64 {
+    let s = deg * RAD_PER_DEG * L;
+    s * s * Q12
+}
+/// A one-sigma scale error as a variance of `L dscale`, Q12 mm^2.
+const fn scale_var(sigma: f64) -> f64 {
+    let s = sigma * L;
+    s * s * Q12
+}
+
+/// Lidar variance square on, Q12 mm^2.
+pub(super) const R_LIDAR: i32 = {
+    let s = cfg::LIDAR_SIGMA.0 as f64 / 65536.0;
+    to_i32(s * s * Q12)
+};
+/// The lidar's variance per `tan^2(incidence)`, Q12 mm^2 (see
+/// `cfg::LIDAR_INCIDENCE_SIGMA_MM`): a correction's `R` is `R_LIDAR cos^2 +
+/// R_INCIDENCE sin^2`, the variance `R_LIDAR + R_INCIDENCE tan^2` scaled by
+/// `cos^2` as the innovation is (no division).
+pub(super) const R_INCIDENCE: i32 = to_i32(cfg::LIDAR_INCIDENCE_SIGMA_MM * cfg::LIDAR_INCIDENCE_SIGMA_MM * Q12);
+/// Compass variance in (L rad)^2, Q12 mm^2.
+pub(super) const R_COMPASS: i32 = to_i32(angle_var(cfg::COMPASS_SIGMA_DEG));
 /// gate^2 in Q8.
 pub(super) const GATE_SQ_Q8: i32 = to_i32(cfg::GATE_SIGMAS * cfg::GATE_SIGMAS * 256.0);
 /// cos(max incidence), Q30.
-pub(super) const MIN_NORMAL: i32 = to_i32(cos_f64(cfg::MAX_INCIDENCE_DEG * TAU / 360.0) * 1_073_741_824.0);
+pub(super) const MIN_NORMAL: i32 = to_i32(cos_f64(cfg::MAX_INCIDENCE_DEG * RAD_PER_DEG) * 1_073_741_824.0);
 /// Straight: distance variance per mm driven (k^2 Lc), as a factor for
-/// `mul_hi(|d| in Q24 mm, .)` giving Q14 mm^2: k^2 Lc 2^14 2^32 / 2^24.
-pub(super) const K_DIST: i32 = to_i32(cfg::SPEED_SPREAD * cfg::SPEED_SPREAD * cfg::SPEED_CORRELATION_MM * Q14 * 256.0);
+/// `mul_hi(|d| in Q24 mm, .)` giving Q12 mm^2: k^2 Lc 2^12 2^32 / 2^24.
+pub(super) const K_DIST: i32 = to_i32(cfg::SPEED_SPREAD * cfg::SPEED_SPREAD * cfg::SPEED_CORRELATION_MM * Q12 * 256.0);
 /// Straight: heading variance per mm driven, (k L / axle)^2 Lc, same scaling.
 pub(super) const K_DRIFT: i32 = {
     let axle = geometry::AXLE_LENGTH.0 as f64 / 65536.0;
     let r = cfg::SPEED_SPREAD * L / axle;
-    to_i32(r * r * cfg::SPEED_CORRELATION_MM * Q14 * 256.0)
+    to_i32(r * r * cfg::SPEED_CORRELATION_MM * Q12 * 256.0)
 };
-/// Turn: heading variance (L rad)^2 Q14 per angle LSB turned, times 2^32
-/// (for `mul_hi(|turn| in LSB, .)`): k^2 Lc_rad L^2 2^14 (2 pi / 2^32) 2^32.
+/// Straight: the compass bias's variance per mm driven, same scaling.
+pub(super) const K_BIAS_MM: i32 = to_i32(angle_var(1.0) * cfg::COMPASS_BIAS_WALK_DEG2_PER_MM * 256.0);
+/// Turn: heading variance (L rad)^2 Q12 per angle LSB turned, times 2^32
+/// (for `mul_hi(|turn| in LSB, .)`): k^2 Lc_rad L^2 2^12 (2 pi / 2^32) 2^32.
 pub(super) const K_TURN: i32 = {
-    let lc = cfg::TURN_CORRELATION_DEG * TAU / 360.0;
-    to_i32(cfg::TURN_SPREAD * cfg::TURN_SPREAD * lc * L * L * Q14 * TAU)
+    let lc = cfg::TURN_CORRELATION_DEG * RAD_PER_DEG;
+    to_i32(cfg::TURN_SPREAD * cfg::TURN_SPREAD * lc * L * L * Q12 * TAU)
 };
-/// Turn: the position block's share, `K_TURN` plus the pivot's variance
-/// across the car (sigma_pivot^2 Lc_rad per radian, the same scaling) over
-/// `(D / L)^2`: the turn's noise vector `g` is `D / L` times the unit vector
-/// across the car, so one `v g g^T` adds both.
-pub(super) const K_TURN_POS: i32 = {
-    let lc = cfg::TURN_CORRELATION_DEG * TAU / 360.0;
-    let d_over_l = geometry::ROTATION_TO_REFERENCE.0 as f64 / 65536.0 / L;
-    let pivot = cfg::PIVOT_SIGMA_MM * cfg::PIVOT_SIGMA_MM * lc * Q14 * TAU;
-    to_i32(K_TURN as f64 + pivot / (d_over_l * d_over_l))
-};
-/// Floors per microsecond, Q14 mm^2 times 2^16.
-pub(super) const FLOOR_POS: u32 = crate::math::round_f64(cfg::POSITION_FLOOR_MM2_PER_S * Q14 / 1e6 * 65_536.0) as u32;
-pub(super) const FLOOR_HEADING: u32 = {
-    let rad = TAU / 360.0;
-    crate::math::round_f64(cfg::HEADING_FLOOR_DEG2_PER_S * rad * rad * L * L * Q14 / 1e6 * 65_536.0) as u32
-};
+/// Turn: the pivot's variance across the car per angle LSB turned, times
+/// 2^32: sigma_pivot^2 Lc_rad per radian, same scaling.
+const fn pivot_k(sigma_mm: f64) -> f64 {
+    sigma_mm * sigma_mm * cfg::TURN_CORRELATION_DEG * RAD_PER_DEG * Q12 * TAU
+}
+pub(super) const K_PIVOT: i32 = to_i32(pivot_k(cfg::PIVOT_SIGMA_MM));
+/// Per microsecond, times 2^16 (for `(k dt) >> 16`): the position and
+/// heading floors, the scales' and the bias's random walks.
+const fn per_us(var_q12_per_s: f64) -> u32 {
+    to_u32(var_q12_per_s / 1e6 * 65_536.0)
+}
+pub(super) const FLOOR_POS: u32 = per_us(cfg::POSITION_FLOOR_MM2_PER_S * Q12);
+pub(super) const FLOOR_HEADING: u32 = per_us(angle_var(1.0) * cfg::HEADING_FLOOR_DEG2_PER_S);
+pub(super) const SCALE_WALK: u32 = per_us(scale_var(cfg::SCALE_WALK_PER_SQRT_S));
+pub(super) const BIAS_WALK: u32 = per_us(angle_var(1.0) * cfg::COMPASS_BIAS_WALK_DEG2_PER_S);
 /// D / L in Q31 (D < 128 mm by the config's assert, so D / L < 1/2).
 pub(super) const D_OVER_L_Q31: i32 = to_i32(geometry::ROTATION_TO_REFERENCE.0 as f64 / 65536.0 / L * 2_147_483_648.0);
-pub(super) const P_MAX: i32 = to_i32(cfg::MAX_VARIANCE_MM2 * Q14);
-/// A lidar's re-acquisition's position variance, Q14 mm^2.
-pub(super) const P_REACQUIRE: i32 = to_i32(cfg::REACQUIRE_SIGMA_MM * cfg::REACQUIRE_SIGMA_MM * Q14);
-pub(super) const P_MIN: i32 = to_i32(cfg::MIN_VARIANCE_MM2 * Q14);
-pub(super) const P0_POS: i32 = to_i32(cfg::INITIAL_SIGMA_MM * cfg::INITIAL_SIGMA_MM * Q14);
-pub(super) const P0_HEADING: i32 = {
-    let s = cfg::INITIAL_SIGMA_DEG * TAU / 360.0 * L;
-    to_i32(s * s * Q14)
-};
+pub(super) const P_MAX: i32 = to_i32(cfg::MAX_VARIANCE_MM2 * Q12);
+pub(super) const P_MIN: i32 = to_i32(cfg::MIN_VARIANCE_MM2 * Q12);
+pub(super) const P0_POS: i32 = to_i32(cfg::INITIAL_SIGMA_MM * cfg::INITIAL_SIGMA_MM * Q12);
+pub(super) const P0_HEADING: i32 = to_i32(angle_var(cfg::INITIAL_SIGMA_DEG));
+pub(super) const P0_SPEED: i32 = to_i32(scale_var(cfg::SPEED_SCALE_SIGMA));
+pub(super) const P0_TURN: i32 = to_i32(scale_var(cfg::TURN_SCALE_SIGMA));
+pub(super) const P0_BIAS: i32 = to_i32(angle_var(cfg::COMPASS_BIAS_SIGMA_DEG));
+/// A lidar's local re-search: the new hypothesis's position variance.
+pub(super) const P_RESEARCH: i32 = to_i32(cfg::RESEARCH_SIGMA_MM * cfg::RESEARCH_SIGMA_MM * Q12);
+/// The scales' bounds and 1, Q29.
+pub(super) const SCALE_ONE: i32 = 1 << 29;
+pub(super) const SCALE_MIN: i32 = to_i32(cfg::SCALE_MIN * 536_870_912.0);
+pub(super) const SCALE_MAX: i32 = to_i32(cfg::SCALE_MAX * 536_870_912.0);
+/// The bias's bound, angle LSB.
+pub(super) const BIAS_MAX_LSB: i32 = to_i32(cfg::COMPASS_BIAS_MAX_DEG / 360.0 * 4_294_967_296.0);
 /// Angle LSB per (L rad) mm, 2^32 / (2 pi L), times 2^9: `mul_hi(K Q21, .)`
 /// then times `nu` (Q16) and `>> 14` gives angle LSB (see `correct`).
 pub(super) const LSB_PER_TILDE_MM_Q9: i32 = to_i32(4_294_967_296.0 / (TAU * L) * 512.0);
 /// (L rad) mm in Q16 per angle LSB, times 2^32 (for `mul_hi`): 2 pi L 2^16 / 2^32 * 2^32.
 pub(super) const TILDE_Q16_PER_LSB: i32 = to_i32(TAU * L * 65536.0);
+/// Radians in Q28 per angle LSB, times 2^32: `mul_hi(angle, .)` is Q28.
+pub(super) const RAD_Q28_PER_LSB: i32 = to_i32(TAU * 268_435_456.0);
+/// The tracker's costs in Q8 (sums of normalised squared innovations).
+pub(super) const OUTLIER_COST_Q8: i32 = to_i32(cfg::OUTLIER_COST * 256.0);
+pub(super) const DOMINATE_Q8: i32 = to_i32(cfg::DOMINATE_COST * 256.0);
+pub(super) const PRUNE_Q8: i32 = to_i32(cfg::PRUNE_COST * 256.0);
+pub(super) const SPAWN_Q8: i32 = to_i32(cfg::SPAWN_COST * 256.0);
+/// A position variance at which an unknown start counts as located, Q12 mm^2.
+pub(super) const LOCATED_VAR: i32 = to_i32(cfg::LOCATED_SIGMA_MM * cfg::LOCATED_SIGMA_MM * Q12);
+/// Travel (Q16 mm) a reading needs since its sensor's last counted one.
+pub(super) const EVIDENCE_Q16: i32 = to_i32(cfg::EVIDENCE_TRAVEL_MM * 65536.0);
+/// The evidence period, microseconds.
+pub(super) const EVIDENCE_PERIOD_US: u32 = to_u32(cfg::EVIDENCE_PERIOD_S * 1e6);
+/// Merging: mm Q16 and angle LSB.
+pub(super) const MERGE_Q16: i32 = to_i32(cfg::MERGE_MM * 65536.0);
+pub(super) const MERGE_LSB: i32 = to_i32(cfg::MERGE_DEG / 360.0 * 4_294_967_296.0);
+/// The reported pose's catch-up (see `cfg::CATCH_UP_*`): Q16 per Q16 mm
+/// moved, Q16 mm per microsecond times 2^8, and the caps in Q16 mm.
+pub(super) const CATCH_UP_PER_MM_Q16: i32 = to_i32(cfg::CATCH_UP_PER_MM * 65536.0);
+pub(super) const CATCH_UP_PER_US: u32 = to_u32(cfg::CATCH_UP_MM_PER_S * 65536.0 / 1e6 * 256.0);
+pub(super) const CATCH_UP_MAX_Q16: i32 = to_i32(cfg::CATCH_UP_MAX_MM * 65536.0);
+pub(super) const CATCH_UP_STANDING_Q16: i32 = to_i32(cfg::CATCH_UP_STANDING_MM * 65536.0);
+pub(super) const AMBIGUOUS_GAP_Q16: i32 = to_i32(cfg::AMBIGUOUS_GAP_MM * 65536.0);
 
 const _: () = {
-    assert!(R_LIDAR > 0 && R_COMPASS > 0 && R_COMPASS < (1 << 22));
+    // Every measurement's noise is at most P_MAX (2^28): a correction's
+    // S = H P H^T / 2^k + R / 2^k < 2^30 + 2^28 fits i32 for any k
+    // (`update::innovation`). With the rescale the compass may be as bad as
+    // 57 degrees one sigma (was 3.6): 20 degrees is asserted to fit.
+    assert!(R_LIDAR > 0 && R_INCIDENCE > 0 && R_COMPASS > 0);
+    assert!(R_LIDAR <= P_MAX && R_INCIDENCE <= P_MAX && R_COMPASS <= P_MAX);
+    assert!(angle_var(20.0) <= P_MAX as f64);
     assert!(GATE_SQ_Q8 > 0 && GATE_SQ_Q8 < (1 << 12));
-    // lidar R = R_LIDAR cos^2(incidence) >= R_LIDAR MIN_NORMAL^2 >= 2^12 (Q14 mm^2):
-    // S >= R stays positive after `correct`'s scaling by 2^-9
-    assert!((R_LIDAR as i64) * (MIN_NORMAL as i64) / (1 << 30) * (MIN_NORMAL as i64) / (1 << 30) >= (1 << 12));
+    // a lidar's R >= R_LIDAR cos^2 >= R_LIDAR MIN_NORMAL^2, and >> 8 (the
+    // largest scaling, entries saturated at 2^31) still at least 1 LSB
+    assert!((R_LIDAR as i64) * (MIN_NORMAL as i64) / (1 << 30) * (MIN_NORMAL as i64) / (1 << 30) >= (1 << 8));
     assert!(LSB_PER_TILDE_MM_Q9 > (1 << 30));
-    // D / L < 1/4 (D < 64 mm): a turn's Jacobian entries stay below 1/2,
-    // which `propagate`'s unsaturated products rely on
+    // D / L < 1/4 (D < 64 mm): a turn's Jacobian entries stay below 1/2
     assert!(D_OVER_L_Q31 >= 0 && D_OVER_L_Q31 < (1 << 29));
-    assert!(MIN_NORMAL > (1 << 28) && MIN_NORMAL <= (1 << 30));
-    assert!(P_MIN > 0 && P_MIN < P_MAX && P_MAX <= (1 << 30));
-    assert!(P0_POS <= P_MAX && P0_HEADING <= P_MAX);
-    assert!(P_REACQUIRE > P_MIN && P_REACQUIRE <= P_MAX);
-    assert!(K_DIST > 0 && K_DRIFT > 0 && K_TURN > 0 && K_TURN_POS >= K_TURN && K_TURN_POS < (1 << 30));
+    assert!(MIN_NORMAL > (1 << 26) && MIN_NORMAL <= (1 << 30));
+    assert!(P_MIN > 0 && P_MIN < P_MAX && P_MAX <= (1 << 28));
+    assert!(P0_POS <= P_MAX && P0_HEADING <= P_MAX && P0_SPEED <= P_MAX && P0_TURN <= P_MAX && P0_BIAS <= P_MAX);
+    assert!(P_RESEARCH > P_MIN && P_RESEARCH <= P_MAX);
+    // a step's turn is below 2^30 LSB (TurnRate::MAX over Dt::MAX, 1.3 rad):
+    // mul_hi by a factor below 2^31 gives below 2^29. The pivot's noise is
+    // its own term: 45 mm one sigma (issue 29: the pivot 60 +- 20 mm behind
+    // the axle) fits, where the old format stopped at 18 mm.
+    assert!(K_DIST > 0 && K_DRIFT > 0 && K_TURN > 0 && K_PIVOT > 0 && K_BIAS_MM > 0);
+    assert!(pivot_k(45.0) < 2_147_483_647.0);
+    assert!(K_DIST < (1 << 24) && K_DRIFT < (1 << 24) && K_BIAS_MM < (1 << 28));
     // floor * dt must fit u32 for dt <= 65535 us
     assert!((FLOOR_POS as u64) * 65_535 < (1 << 32) && (FLOOR_HEADING as u64) * 65_535 < (1 << 32));
+    assert!((SCALE_WALK as u64) * 65_535 < (1 << 32) && (BIAS_WALK as u64) * 65_535 < (1 << 32));
+    assert!((CATCH_UP_PER_US as u64) * 65_535 < (1 << 32));
+    assert!(SCALE_MIN > 0 && SCALE_MIN < SCALE_ONE && SCALE_MAX > SCALE_ONE);
+    assert!(OUTLIER_COST_Q8 > GATE_SQ_Q8 && PRUNE_Q8 > DOMINATE_Q8 && PRUNE_Q8 < (1 << 20));
+    assert!(CATCH_UP_STANDING_Q16 <= CATCH_UP_MAX_Q16 && CATCH_UP_PER_MM_Q16 < (1 << 16));
 };

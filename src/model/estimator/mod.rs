@@ -1,134 +1,107 @@
-//! Where the robot is: an extended Kalman filter over (x, y, theta) that
-//! fuses the state update with the two lidars and the compass in a known
-//! rectangular arena. Integer only.
+//! Where the robot is: a few extended Kalman filters (hypotheses) over the
+//! pose, the actuator lines' scales and the compass's bias, fusing the state
+//! update with the two lidars and the compass in a known rectangular arena.
+//! Integer only. The longer story, with the figures, is `docs/estimator.md`.
 //!
-//! # The filter
-//! - State: the [`Pose`] itself (x, y as [`crate::math::Coord`], theta as an
-//!   [`Angle`]); the covariance is over the error `(dx, dy, L dtheta)` with
-//!   `L` = 256 mm, so all three components are in mm and one Q format fits
-//!   them all ([`Covariance`]: six `i32`, Q14 mm^2, symmetric by storage).
-//! - Predict: the pose moves by [`advance`](crate::model::state::advance) (the report's equations, including
-//!   its turn case); the covariance by `F P F^T + Q`, with `F` the Jacobian
-//!   of those same equations. `Q` models the lab's speed spread as a random
-//!   walk per distance driven (or angle turned) whose variance over one
-//!   correlation length (config) equals the spread squared, the heading
-//!   drift of two mismatched wheels while driving straight, and a small
-//!   floor per second.
+//! # One hypothesis (a filter)
+//! - State (7, [`covariance::N`]): the [`Pose`] (x, y as
+//!   [`crate::math::Coord`], theta as an [`Angle`]); the straight speed's
+//!   scale and the clockwise and counter-clockwise turn rates' scales over
+//!   the config's actuator lines (Q29, learned online: real turns run 0.6-1.8
+//!   times the lines); the compass's bias (an [`Angle`], a slow random walk
+//!   over the floor). The covariance is over the errors times a lever `L` =
+//!   256 mm for all but the position, so every entry is in mm^2 and one Q
+//!   format fits ([`Covariance`]: the upper triangle, Q12 mm^2, cap 2^28).
+//! - Predict: the pose moves by [`advance`](crate::model::state::advance)
+//!   of the motion scaled by the hypothesis's scales; the covariance by `F P
+//!   F^T + Q` with `F` as shears (state `i` moves by `f` times state `j`):
+//!   position by heading and speed scale, heading by the turn's scale. `Q`:
+//!   the lab's speed spread per distance (or angle), the wheels' drift, the
+//!   pivot's slop across the car, the scales' and the bias's random walks,
+//!   small floors per second.
 //! - Lidar correction: see [`crate::model::measurement`]. The innovation is
-//!   `z |cos incidence| - A` (how far past its wall the measured ray ends,
-//!   along the wall's normal), with `H` its Jacobian and `R = sigma^2 cos^2`:
-//!   the ordinary EKF update scaled by `|cos incidence|` on both sides
-//!   (the same gain to first order), so no division by a cosine is needed.
-//!   Beams further than the config's incidence limit from square on, or
-//!   passing within the corner margin of a corner, are not used
-//!   ([`Update::Unusable`]).
-//! - Compass correction: `H = (0, 0, 1)`, the innovation the wrapped angle
-//!   difference.
+//!   `z |cos incidence| - A` with `H` its Jacobian; the noise grows with
+//!   the incidence, `R = sigma^2 cos^2 + sigma_inc^2 sin^2` (the variance
+//!   `sigma^2 + (sigma_inc tan)^2` scaled by `cos^2` as the innovation is:
+//!   no division, no hard cut but the linearisation's limit,
+//!   [`cfg::MAX_INCIDENCE_DEG`]). Beams passing within the corner margin of
+//!   a corner are not used ([`Update::Unusable`]).
+//! - Compass correction: it reads heading plus bias, `H = (0, 0, 1, 0, 0,
+//!   0, 1)`; the lidars tell the two apart.
 //! - Gating: a reading whose innovation `nu` has `nu^2 > gate^2 S` is an
-//!   outlier: counted, not used ([`Update::Outlier`]).
+//!   outlier for that hypothesis: not used ([`Update::Outlier`]).
 //!
-//! # Re-acquisition and the arena limit
-//! A gate alone locks a lost estimate out for good: a body held still for
-//! 0.3 s of a commanded turn (a wheel against a wall) left the heading 41
-//! degrees off, further than the gate from every true compass reading, and
-//! 60 s of them were all rejected (82 degrees after 0.6 s, 171 after 1 s; a
-//! blocked 1 s straight left 143 mm). So:
-//! - Each sensor counts its outliers in a row (an accepted reading ends the
-//!   run, an unusable one leaves it). At [`cfg::REACQUIRE_AFTER`] the
-//!   estimator takes the sensor's side: the compass sets the heading's
-//!   variance to the cap and zeroes its correlations; a lidar raises both
-//!   position variances to at least [`cfg::REACQUIRE_SIGMA_MM`] squared
-//!   and zeroes their correlations (the beam may be meeting another wall
-//!   than the estimate thinks, so the other axis is in doubt too: the
-//!   other lidar's next reading then passes the wider gate). The reading
-//!   that ends the run is then used with its innovation clipped to the
-//!   gate, `nu_used = sign(nu) min(|nu|, gate sqrt(S))` (counted as
-//!   accepted and in [`SensorStats::reacquired`]). Single outliers and
-//!   shorter runs stay rejected; a persistent disagreement wins, in steps.
-//!   A lidar reading whose distance to its wall along the normal
-//!   (`z |cos incidence|`) lies outside `[0, arena extent]` cannot come
-//!   from any position in the arena (a lidar against an obstacle or
-//!   pressed to a wall): an outlier that does not count toward a run.
-//! - No teleports: every correction's step `K nu` obeys
-//!   `step^T P^-1 step = nu^2 H P H^T / S^2 <= nu^2 / S <= gate^2`, with
-//!   `P` the covariance it starts from (re-inflated, for a re-acquisition).
-//!   A lidar's re-acquisition moves the position at most gate times the
-//!   larger of its sigma and the one held (157 mm at 45 mm), so an estimate
-//!   lost by more walks back in several runs. The heading's cap is 57
-//!   degrees one sigma: half a turn is 3.1 sigma, inside the gate, so the
-//!   compass, an absolute sensor whose errors do not build up, sets a lost
-//!   heading in one step (the clip never binds for it).
-//! - The position is kept within [`cfg::ARENA_MARGIN`] of the arena after
-//!   every predict and correction (`max`/`min` on the 64-bit coordinates):
-//!   the reference point is on the car, inside the box, so a position
-//!   further out is known wrong (dead reckoning of a body held at a wall
-//!   drove the estimate about 1 m outside in the soak).
+//! # No teleports: several hypotheses, a reported pose that never jumps
+//! Re-acquisition (ten disagreeing readings in a row: take the sensor's
+//! side) moved a standing robot's estimate by up to 157 mm on what were ten
+//! readings of one view. It is gone (issue 29). Instead:
+//! - Up to [`cfg::MAX_HYPOTHESES`] filters. [`Estimator::seed`] starts them
+//!   from a localization's clusters (pose, sigma, weight each; never their
+//!   mean). Every reading corrects every hypothesis and adds to its cost
+//!   (its normalised squared innovation, [`cfg::OUTLIER_COST`] when gated
+//!   out) - but only readings that are new evidence: a sensor's reading
+//!   counts once the robot has moved [`cfg::EVIDENCE_TRAVEL_MM`] since that
+//!   sensor's last counted one, or [`cfg::EVIDENCE_PERIOD_S`] has passed.
+//!   Ten readings of a standing robot are one.
+//! - A sensor whose counted readings disagree with the best hypothesis
+//!   [`cfg::RESEARCH_AFTER`] times in a row (so: while the robot moves)
+//!   triggers a local re-search: a new hypothesis takes the sensor's side
+//!   (a lidar: the best's copy with the position uncertain by
+//!   [`cfg::RESEARCH_SIGMA_MM`], moved along the wall's normal if need be;
+//!   the compass: one copy with the heading lost, one with the bias moved),
+//!   starting [`cfg::SPAWN_COST`] behind. Hypotheses [`cfg::PRUNE_COST`]
+//!   behind the best are dropped, near twins merged.
+//! - [`Tracking`]: `Located` when one hypothesis leads all others by
+//!   [`cfg::DOMINATE_COST`]; `Ambiguous` while none does; `Unknown` from a
+//!   typed start ([`Estimator::new`], [`Estimator::reset`]) until the
+//!   position is known within [`cfg::LOCATED_SIGMA_MM`].
+//! - The reported pose ([`Estimator::pose`]) dead-reckons with the best's
+//!   scales; while `Located` it moves toward the best hypothesis by at most
+//!   a slack saved up while moving ([`cfg::CATCH_UP_PER_MM`] per mm and
+//!   [`cfg::CATCH_UP_MM_PER_S`] per second, at most [`cfg::CATCH_UP_MAX_MM`]
+//!   per axis, cut to [`cfg::CATCH_UP_STANDING_MM`] when the servos stop);
+//!   while `Ambiguous` it holds (dead reckoning only). So a standing robot's
+//!   reported position moves at most 8.5 mm, and between two rows at most
+//!   what the wheels drove plus 17 mm (the invariants of issue 29, asserted
+//!   in `tests/estimator/invariants.rs`).
+//! - The position is kept within [`cfg::ARENA_MARGIN`] of the arena.
 //!
-//! Measured: the held turn of 0.3-1 s and the held 1 s straight are back
-//! within 5 degrees and 20 mm 0.06-0.36 s after the body is free
-//! (`tests/control/soak.rs`); over the soak's million ticks the estimate stays
-//! within the margin and the error at checkpoints clear of walls has a 90th
-//! percentile of 20 mm / 4 degrees. A standing robot 550 mm and half a turn
-//! from where a settled estimate believes it is found again in one compass
-//! and four lidar re-acquisitions, every step within the gate of its
-//! covariance, within 20 mm after 1.2-1.3 s
-//! (`tests/estimator/no_teleport.rs`).
-//! Cost on the robot: the accepted paths end a run (a store) and keep the
-//! position in bounds (two 32-bit compares per axis on the coordinates'
-//! high words; predict skips it standing still); everything about a run of
-//! outliers is out of line (`#[cold]`).
+//! Why not a particle filter: each particle needs the beam geometry
+//! ([`Beam`](crate::model::measurement::Beam), a few hundred lx106
+//! instructions) per lidar reading; the tick's budget of 15,000 instructions
+//! holds about 40, far too few to cover the box's 0.4 m^2 by 360 degrees
+//! with a useful density, and the DRAM left holds fewer than that at 7 states.
+//! Four Kalman hypotheses cost four corrections and carry what a particle
+//! cloud of thousands would (a Gaussian each).
 //!
 //! # Numerical safety
 //! - Covariance update `P - K b^T` with `b = P H^T`, `K = b / S`: symmetric
-//!   by storage (only the upper triangle exists). The diagonal's products
-//!   are rounded down, so less is removed than exact arithmetic would.
-//! - After every step the covariance is conditioned: a variance past the
-//!   cap scales its row and column by 1/2 (a congruence `D P D`, which keeps
-//!   `P` positive semi-definite), a variance under the floor is raised (adds
-//!   a positive diagonal term), and a covariance with `P_ij^2 > P_ii P_jj`
-//!   (impossible for a valid covariance; only rounding at a correlation of
-//!   1 gets there) is clamped to `sqrt(P_ii P_jj)` and counted in
-//!   [`EstimatorStats::repairs`]. The per-second noise floors (config) keep
-//!   `P` a margin away from singular; the long-run test checks that `P`
-//!   stays positive definite (f64 Cholesky, every tick) for hours.
-//! - No division at all: a correction needs `1/S` with `S >= R > 0` (the
-//!   measurement noise is a positive constant times a squared cosine that is
-//!   at least the incidence limit's; the scaling below keeps `S >= 1` LSB),
-//!   computed as a reciprocal by Newton's method and kept just below the
-//!   exact value. A gain of 2^9 or more (impossible for a valid `P`) is not
-//!   applied: counted in `repairs`, the reading reported as an outlier.
+//!   by storage. The diagonal's products are rounded down.
+//! - After every step the covariance's diagonal is kept between the floor
+//!   and the cap (a variance past the cap scales its row and column by 1/2,
+//!   `D P D`); after a correction (the step whose rounding can break it) a
+//!   correlation past 1 is clamped and counted in
+//!   [`EstimatorStats::repairs`]. A prediction is a congruence plus
+//!   positive noise: `tests/estimator_longrun.rs` checks `P` positive
+//!   definite (f64 Cholesky) after every tick for hours.
+//! - No division: `1/S` by Newton's method, kept just below the exact value.
+//!   A gain of 2^9 or more (impossible for a valid `P`) is not applied.
 //!
-//! # Arithmetic of a correction (32-bit but three products)
-//! - Scale: the covariance entries the row reads are shifted right by `k`
-//!   so that they are below 2^23 (`k = 0` below 512 mm^2: steady state is
-//!   exact). Then `b = P H^T` (`mul_hi`, `|b| < 2^27`) and `S = H b + R`
-//!   (`< 2^31`) are i32 in Q(14 - k).
-//! - Gate: `nu^2` against `gate^2 S` as exact 64-bit products ([`mul_wide`](crate::math::mul_wide)).
-//! - `S` is normalised to `[2^31, 2^32)` (a 5-step binary search: the lx106
-//!   has no NSAU) and its reciprocal `y` comes from a 64-entry seed table and
-//!   two Newton steps (error below 2^-26); `b` is normalised to `beta` with
-//!   a common shift.
-//! - `t_i = mul_hi(|beta_i|, y)` (signed, rounded toward zero) gives both the
-//!   gain `K = b / S` (Q21, by a shift) and the covariance update
-//!   `b_i b_j / S = mul_hi(t_i, beta_j)` shifted back: relative precision
-//!   about 2^-24 of the largest term, whatever the size of `S`.
-//! - The state update `K nu` is exact ([`mul_wide`](crate::math::mul_wide), Q37 -> Coord); the
-//!   heading's goes through one `mul_hi` to angle LSB (modulo a turn).
+//! # Arithmetic of a correction (32-bit but the state's products)
+//! - Scale: the covariance entries the row reads are shifted right by `k` so
+//!   that they are below 2^23 (`k = 0` below 2,048 mm^2). `b = P H^T`
+//!   (`|b| < 2^27`) and `S = H b + R` (`< 2^30 + 2^28`: every `R` is at most
+//!   `P_MAX`, asserted) are i32 in Q(12 - k).
+//! - Gate: `nu^2` against `gate^2 S`, 64-bit products ([`mul_wide`](crate::math::mul_wide)).
+//! - `S` normalised, its reciprocal from a seed table and two Newton steps;
+//!   `t_i = beta_i / S` gives the gain and the update `b_i b_j / S`.
+//! - The state update `K nu` is exact (Q37 -> Coord; -> angle LSB; -> Q29 scale).
 //!
 //! # Cost (lx106: no 32x32->64 multiply, no divide)
-//! The figures per call (predict per motion, each update accepted) are in
-//! `lx106/BENCHMARKS.md`, measured by `lx106/run.sh`.
-//!
-//! Predict: [`advance`](crate::model::state::advance) on the pose in place (no `sin_cos` going straight,
-//! one turning, both from the pose's cache), the Jacobian and noise from
-//! the cached sin/cos of the old and new heading, about 17 [`mul_hi`](crate::math::mul_hi) (~11
-//! instructions each, the Q30 products unsaturated where `|f| < 1/2` bounds
-//! them); no 64-bit multiply, no division. A correction: about 20 `mul_hi`,
-//! 5 calls of [`mul_wide`](crate::math::mul_wide) (~23 instructions each, out of line), no
-//! runtime helper call; a lidar adds its [`Beam`](crate::model::measurement::Beam) (the cached sin/cos
-//! turned by the mount's quarter turn, 6 `mul_hi` with the corner test). Every step ends with the
-//! conditioning (~80 instructions; an exact `P_ij^2 <= P_ii P_jj` test from
-//! 15-bit partial products only when `|P_ij| > min(P_ii, P_jj)`).
+//! Per call figures in `lx106/BENCHMARKS.md`, measured by `lx106/run.sh`:
+//! a control tick with one hypothesis about 11,900 instructions (the bar:
+//! 15,000), each further hypothesis about 11,000 more (predict and correct:
+//! four are about 45,000, 5.6 % of the 10 ms tick at 80 MHz).
 
 // host only (std): replays CSV rows whose width is checked first
 #[cfg(feature = "std")]
@@ -137,113 +110,104 @@ pub mod replay;
 
 mod constants;
 mod covariance;
+mod outcome;
 mod predict;
+mod tracker;
 mod update;
 
 use crate::config::estimator as cfg;
-use crate::math::{isqrt, Angle, Coord};
+use crate::math::{isqrt, Angle, Dt, Length};
+use crate::model::actuator::Motion;
 use crate::model::measurement::Arena;
 use crate::model::state::Pose;
-use constants::{P0_HEADING, P0_POS, P_MAX, R_COMPASS};
+use constants::{CATCH_UP_STANDING_Q16, P_MAX, R_COMPASS};
+use predict::{Bounds, Filter};
 
 pub use crate::model::measurement::LidarId;
-pub use covariance::Covariance;
+pub use covariance::{Covariance, BIAS, CCW, CW, N, SPEED, T, X, Y};
+pub use outcome::{EstimatorStats, PoseSigma, SensorStats, Tracking, Update};
+pub use predict::Scales;
 
-/// What a correction did with a reading.
-#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
-pub enum Update {
-    /// Used to correct the pose.
-    Accepted,
-    /// Too far from its prediction (innovation gate): counted, not used.
-    Outlier,
-    /// The geometry makes the reading useless: the beam meets its wall too
-    /// obliquely or passes near a corner. Counted, not used.
-    Unusable,
-}
-
-impl Update {
-    pub fn is_accepted(self) -> bool {
-        self == Update::Accepted
-    }
-}
-
-/// Counts of what became of one sensor's readings (saturating).
-#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug, Default)]
-pub struct SensorStats {
-    pub accepted: u32,
-    pub outliers: u32,
-    pub unusable: u32,
-    /// Times a run of [`cfg::REACQUIRE_AFTER`] outliers in a row made the
-    /// estimator take this sensor's side (the reading that ended the run is
-    /// counted as accepted, the run's others as outliers).
-    pub reacquired: u32,
-}
-
-impl SensorStats {
-    fn count(&mut self, u: Update) {
-        let c = match u {
-            Update::Accepted => &mut self.accepted,
-            Update::Outlier => &mut self.outliers,
-            Update::Unusable => &mut self.unusable,
-        };
-        *c = c.saturating_add(1);
-    }
-    /// All readings seen.
-    pub fn total(&self) -> u32 {
-        self.accepted.saturating_add(self.outliers).saturating_add(self.unusable)
-    }
-}
-
-/// Per-sensor counts, and how often the covariance needed repair.
-#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug, Default)]
-pub struct EstimatorStats {
-    pub front: SensorStats,
-    pub right: SensorStats,
-    pub compass: SensorStats,
-    /// Times the covariance broke `P_ij^2 <= P_ii P_jj` (by rounding, at a
-    /// correlation of 1) and was clamped back, or a gain overflowed.
-    pub repairs: u32,
-}
-
-/// The covariance's diagonal in the units people read (for telemetry):
-/// one-sigma position in mm (Q16, a [`crate::math::Length`]'s bits) and heading as an [`Angle`].
-#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug, Default)]
-pub struct PoseSigma {
-    pub x: crate::math::Length,
-    pub y: crate::math::Length,
-    pub theta: Angle,
-}
-
-/// The lever that turns a heading error into mm: `L dtheta`, L = 256 mm.
+/// The lever that turns a heading (or scale, or bias) error into mm:
+/// `L dtheta`, L = 256 mm.
 pub const HEADING_LEVER_MM: i32 = 256;
 
-/// Outliers in a row per sensor (see [`cfg::REACQUIRE_AFTER`]).
+/// A hypothesis to start from (a localization's cluster): its pose, its
+/// position's one-sigma per axis, and its weight (relative: only ratios
+/// between the seeds matter; 0 counts as 1).
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub struct Seed {
+    pub pose: Pose,
+    pub sigma_x: Length,
+    pub sigma_y: Length,
+    pub weight: u32,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
+enum Sensor {
+    Front,
+    Right,
+    Compass,
+}
+
+impl Sensor {
+    fn of(which: LidarId) -> Sensor {
+        match which {
+            LidarId::Front => Sensor::Front,
+            LidarId::Right => Sensor::Right,
+        }
+    }
+}
+
 #[derive(Clone, Copy, PartialEq, Eq, Hash, Debug, Default)]
-struct Streaks {
-    front: u8,
-    right: u8,
-    compass: u8,
+struct EvidenceSet {
+    front: tracker::Evidence,
+    right: tracker::Evidence,
+    compass: tracker::Evidence,
+}
+
+impl EvidenceSet {
+    const FRESH: EvidenceSet = {
+        let e = tracker::Evidence { counted_at: 0, counted_us: 0, fresh: true, disagreements: 0 };
+        EvidenceSet { front: e, right: e, compass: e }
+    };
 }
 
 /// The pose estimator. See the module docs.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
 pub struct Estimator {
-    pose: Pose,
-    p: Covariance,
+    hyps: [Filter; cfg::MAX_HYPOTHESES],
+    /// Each hypothesis's cost, Q8 (the best's is 0 after every correction).
+    costs: [i32; cfg::MAX_HYPOTHESES],
+    /// `hyps[..live]` are live (at least one).
+    live: usize,
+    best: usize,
+    /// One hypothesis leads all others by [`cfg::DOMINATE_COST`].
+    dominant: bool,
+    tracking: Tracking,
+    /// What [`Estimator::pose`] reports (see the module docs).
+    reported: Pose,
+    /// How far (Q16 mm, per axis) the reported pose may still move toward
+    /// the best hypothesis.
+    slack: i32,
+    standing: bool,
+    /// Travel so far, Q16 mm (wrapping): straight distance plus turns' arcs.
+    odometer: i32,
+    /// Time predicted so far, us (wrapping).
+    clock_us: u32,
+    evidence: EvidenceSet,
     arena: Arena,
-    /// The box the position is kept in, whole mm: the arena plus
-    /// [`cfg::ARENA_MARGIN`] on every side, rounded inward (lower bound of
-    /// both axes, upper bounds of x and y).
-    low_mm: i32,
-    high_x_mm: i32,
-    high_y_mm: i32,
-    streaks: Streaks,
+    /// Where the hypotheses' positions are kept (the arena and its margin).
+    bounds: Bounds,
+    /// Where the reported position is kept: the arena itself (the reference
+    /// point is on the car, inside the box).
+    inside: Bounds,
     stats: EstimatorStats,
 }
 
 impl Estimator {
     /// Starts at `initial` in the config's arena, with the config's initial
-    /// uncertainty.
+    /// uncertainty (`Unknown`).
     pub fn new(initial: Pose) -> Estimator {
         Estimator::with_arena(initial, Arena::DEFAULT)
     }
@@ -253,68 +217,151 @@ impl Estimator {
         let m = cfg::ARENA_MARGIN;
         // Length is Q16 mm: >> 16 is the floor in whole mm (rounds each
         // bound inward: -floor(m) >= -m)
-        let whole = |l: crate::math::Length| l.0 >> 16;
-        let mut est = Estimator {
-            pose: initial,
-            p: Self::initial_covariance(),
-            arena,
+        let whole = |l: Length| l.0 >> 16;
+        let bounds = Bounds {
             low_mm: -whole(m),
             high_x_mm: whole(arena.length_x.saturating_add(m)),
             high_y_mm: whole(arena.width_y.saturating_add(m)),
-            streaks: Streaks::default(),
+        };
+        let filter = Filter::new(initial);
+        let mut est = Estimator {
+            hyps: [filter; cfg::MAX_HYPOTHESES],
+            costs: [0; cfg::MAX_HYPOTHESES],
+            live: 1,
+            best: 0,
+            dominant: true,
+            tracking: Tracking::Unknown,
+            reported: initial,
+            slack: 0,
+            standing: true,
+            odometer: 0,
+            clock_us: 0,
+            evidence: EvidenceSet::FRESH,
+            arena,
+            bounds,
+            inside: Bounds { low_mm: 0, high_x_mm: whole(arena.length_x), high_y_mm: whole(arena.width_y) },
             stats: EstimatorStats::default(),
         };
-        est.keep_in_arena();
+        est.reset(initial);
         est
     }
 
-    fn initial_covariance() -> Covariance {
-        Covariance { xx: P0_POS, xy: 0, xt: 0, yy: P0_POS, yt: 0, tt: P0_HEADING }
+    /// The reported pose (see the module docs: it never jumps).
+    pub fn pose(&self) -> Pose {
+        self.reported
     }
 
-    /// The estimated pose.
-    pub fn pose(&self) -> Pose {
-        self.pose
+    /// Located, ambiguous or unknown.
+    pub fn tracking(&self) -> Tracking {
+        self.tracking
     }
 
     pub fn arena(&self) -> Arena {
         self.arena
     }
 
-    /// Forgets everything but the counts: the pose is `pose`, the
-    /// uncertainty the config's initial one.
+    /// Forgets everything but the counts: one hypothesis at `pose` with the
+    /// config's initial uncertainty, `Unknown`.
     pub fn reset(&mut self, pose: Pose) {
-        self.pose = pose;
-        self.p = Self::initial_covariance();
-        self.streaks = Streaks::default();
-        self.keep_in_arena();
+        let mut f = Filter::new(pose);
+        f.keep_in(&self.bounds);
+        self.start(&[(f, 0)], Tracking::Unknown);
     }
 
     /// Forgets everything but the counts and starts at a localization's
-    /// fix ([`crate::model::locate`]): its pose, its position uncertainty
-    /// (uncorrelated), and the compass's for the heading.
+    /// fix ([`crate::model::locate`]): one hypothesis per place the
+    /// readings fit (its clusters, never their mean), each with its spread
+    /// and weight; a fix of one place is one seed, its pose and position
+    /// uncertainty. The heading's uncertainty is the compass's.
     pub fn start_at(&mut self, fix: &crate::model::locate::Fix) {
-        // sigma in mm Q16 -> variance Q14 mm^2: (s >> 8)^2 is Q16 mm^2, >> 2;
-        // capped at the largest variance kept
-        let var = |s: crate::math::Length| {
-            let q8 = i64::from(s.0 >> 8);
-            i32::try_from((q8 * q8) >> 2).unwrap_or(P_MAX).min(P_MAX)
-        };
-        self.reset(fix.pose);
-        self.p = Covariance { xx: var(fix.sigma_x), xy: 0, xt: 0, yy: var(fix.sigma_y), yt: 0, tt: R_COMPASS };
-        self.condition();
+        let whole = Seed { pose: fix.pose, sigma_x: fix.sigma_x, sigma_y: fix.sigma_y, weight: 1 };
+        let mut seeds = [whole; cfg::MAX_HYPOTHESES];
+        let clusters = fix.clusters();
+        if clusters.len() < 2 {
+            self.seed(&[whole]);
+            return;
+        }
+        for (seed, c) in seeds.iter_mut().zip(clusters) {
+            *seed = Seed { pose: fix.pose_of(c), sigma_x: c.sigma_x, sigma_y: c.sigma_y, weight: c.weight };
+        }
+        self.seed(seeds.get(..clusters.len().min(cfg::MAX_HYPOTHESES)).unwrap_or(&[whole]));
     }
 
-    /// Keeps the position within [`cfg::ARENA_MARGIN`] of the arena, to the
-    /// whole mm (the heading and the covariance are left alone): a
-    /// projection onto what the position can be. The tests look at a
-    /// coordinate's high word only (its floor in mm, Coord being Q32): two
-    /// 32-bit compares per axis, the 64-bit stores only when out of bounds.
-    /// (For an arena of negative size the upper bound wins: no panic.)
-    fn keep_in_arena(&mut self) {
-        let p = &mut self.pose;
-        clamp_mm(&mut p.x, self.low_mm, self.high_x_mm);
-        clamp_mm(&mut p.y, self.low_mm, self.high_y_mm);
+    /// Forgets everything but the counts and starts from up to
+    /// [`cfg::MAX_HYPOTHESES`] seeds (a localization's clusters; the rest
+    /// are ignored). With no seed nothing changes. `Located` when one seed
+    /// outweighs the others by [`cfg::DOMINATE_COST`], else `Ambiguous`.
+    pub fn seed(&mut self, seeds: &[Seed]) {
+        // sigma in mm Q16 -> variance Q12 mm^2: (s >> 8)^2 is Q16 mm^2, >> 4;
+        // capped at the largest variance kept
+        let var = |s: Length| {
+            let q8 = i64::from(s.0 >> 8);
+            i32::try_from((q8 * q8) >> 4).unwrap_or(P_MAX).min(P_MAX)
+        };
+        // a weight's cost: 2 ln(w_max / w) ~ 2 ln 2 per bit (Q8: 355)
+        let bits = |w: u32| 32 - w.max(1).leading_zeros() as i32;
+        let top = seeds.iter().map(|s| bits(s.weight)).max().unwrap_or(0);
+        let mut filters = [(Filter::new(Pose::default()), 0); cfg::MAX_HYPOTHESES];
+        let mut n = 0;
+        for (slot, s) in filters.iter_mut().zip(seeds.iter()) {
+            let mut f = Filter::new(s.pose);
+            f.p.set(X, X, var(s.sigma_x));
+            f.p.set(Y, Y, var(s.sigma_y));
+            f.p.set(T, T, R_COMPASS);
+            f.p.condition();
+            f.keep_in(&self.bounds);
+            *slot = (f, (top - bits(s.weight)).saturating_mul(355));
+            n += 1;
+        }
+        if let Some(seeded) = filters.get(..n) {
+            if !seeded.is_empty() {
+                self.start(seeded, Tracking::Located);
+            }
+        }
+    }
+
+    fn start(&mut self, hyps: &[(Filter, i32)], tracking: Tracking) {
+        for ((h, c), (f, cost)) in self.hyps.iter_mut().zip(self.costs.iter_mut()).zip(hyps.iter()) {
+            (*h, *c) = (*f, *cost);
+        }
+        self.live = hyps.len().clamp(1, cfg::MAX_HYPOTHESES);
+        self.tracking = tracking;
+        self.evidence = EvidenceSet::FRESH;
+        self.slack = CATCH_UP_STANDING_Q16;
+        self.standing = true;
+        // the reported pose starts at the best seed (the cheapest)
+        self.best = self.costs.iter().take(self.live).enumerate().min_by_key(|&(_, c)| *c).map_or(0, |(i, _)| i);
+        self.reported = self.best_filter().pose;
+        self.settle();
+    }
+
+    /// Moves every hypothesis by `motion` held for `dt` (scaled by its
+    /// scales) and grows the uncertainty; the reported pose dead-reckons.
+    pub fn predict(&mut self, motion: Motion, dt: Dt) {
+        self.predict_all(motion, dt);
+    }
+
+    /// Corrects with a lidar's model output (distance from the reference
+    /// point along the beam, see [`crate::model::lidar`]).
+    pub fn update_lidar(&mut self, which: LidarId, distance: Length) -> Update {
+        let u = self.lidar_all(which, distance);
+        self.stats_of(Sensor::of(which)).count(u);
+        u
+    }
+
+    /// Corrects with a compass reading (clockwise from north).
+    pub fn update_heading(&mut self, heading: Angle) -> Update {
+        let u = self.heading_all(heading);
+        self.stats.compass.count(u);
+        u
+    }
+
+    fn stats_of(&mut self, sensor: Sensor) -> &mut SensorStats {
+        match sensor {
+            Sensor::Front => &mut self.stats.front,
+            Sensor::Right => &mut self.stats.right,
+            Sensor::Compass => &mut self.stats.compass,
+        }
     }
 
     /// Counts of accepted and rejected readings per sensor.
@@ -322,38 +369,44 @@ impl Estimator {
         self.stats
     }
 
-    /// The full covariance (Q14 mm^2, heading as `L dtheta`, see [`Covariance`]).
+    /// The best hypothesis's covariance (Q12 mm^2, see [`Covariance`]).
     pub fn covariance(&self) -> Covariance {
-        self.p
+        self.best_filter().p
     }
 
-    /// The covariance's diagonal: variances of x and y in Q14 mm^2 and of
-    /// the heading in Q14 (256 mm rad)^2 (for telemetry).
-    pub fn covariance_diagonal(&self) -> [i32; 3] {
-        [self.p.xx, self.p.yy, self.p.tt]
+    /// The best hypothesis's covariance diagonal, Q12 mm^2 (see [`N`]).
+    pub fn covariance_diagonal(&self) -> [i32; N] {
+        self.best_filter().p.diagonal()
     }
 
-    /// One-sigma uncertainties in mm and as an angle (integer square roots,
-    /// no division; for telemetry).
+    /// The best hypothesis's pose (the reported pose follows it; see the
+    /// module docs).
+    pub fn best_pose(&self) -> Pose {
+        self.best_filter().pose
+    }
+
+    /// The best hypothesis's learned scales and compass bias.
+    pub fn scales(&self) -> Scales {
+        self.best_filter().scales
+    }
+    pub fn compass_bias(&self) -> Angle {
+        self.best_filter().bias
+    }
+
+    /// The live hypotheses: pose and cost (Q8, the best's 0).
+    pub fn hypotheses(&self) -> impl Iterator<Item = (Pose, i32)> + '_ {
+        self.hyps.iter().zip(self.costs.iter()).take(self.live).map(|(h, &c)| (h.pose, c))
+    }
+
+    /// One-sigma uncertainties of the best hypothesis in mm and as an angle
+    /// (integer square roots, no division; for telemetry).
     pub fn sigma(&self) -> PoseSigma {
-        // sqrt(P Q14 mm^2) = isqrt(P) 2^-7 mm -> Q16: << 9. P <= 2^30: isqrt <= 2^15.
-        let len = |v: i32| crate::math::Length((isqrt(v.max(0) as u32) << 9) as i32);
-        // sqrt(P_tt) 2^-7 mm / L rad -> LSB: isqrt 2^-7 / 256 * 2^32 / (2 pi) = isqrt * 2^17 / (2 pi)
-        let t = isqrt(self.p.tt.max(0) as u32);
-        PoseSigma { x: len(self.p.xx), y: len(self.p.yy), theta: Angle(t.saturating_mul(20_861)) }
-    }
-}
-
-/// [`Estimator::keep_in_arena`] for one coordinate: into `[low, high]` mm
-/// by its high word (`|c| < 2^63`: it fits).
-// tick bar
-#[inline(always)]
-fn clamp_mm(c: &mut Coord, low: i32, high: i32) {
-    let mm = (c.0 >> 32) as i32;
-    if mm < low {
-        *c = Coord(i64::from(low) << 32);
-    }
-    if mm >= high {
-        *c = Coord(i64::from(high) << 32);
+        let p = &self.best_filter().p;
+        // sqrt(P Q12 mm^2) = isqrt(P) 2^-6 mm -> Q16: << 10. P <= 2^28 (2^31 at
+        // most before conditioning): isqrt < 2^16, saturated.
+        let len = |v: i32| Length((isqrt(v.max(0) as u32) << 10).min(i32::MAX as u32) as i32);
+        // sqrt(P_tt) 2^-6 mm / L rad -> LSB: isqrt 2^-6 / 256 * 2^32 / (2 pi) = isqrt * 2^18 / (2 pi)
+        let t = isqrt(p.get(T, T).max(0) as u32);
+        PoseSigma { x: len(p.get(X, X)), y: len(p.get(Y, Y)), theta: Angle(t.saturating_mul(41_722)) }
     }
 }

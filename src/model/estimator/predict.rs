@@ -1,80 +1,178 @@
-//! The prediction: the pose moves by the state update, the covariance
-//! grows by the motion's noise.
+//! One hypothesis's filter, and its prediction: the pose moves by the
+//! state update with the learned scales, the covariance by the motion's
+//! Jacobian (a few shears) and noise.
 
-use super::constants::{D_OVER_L_Q31, FLOOR_HEADING, FLOOR_POS, K_DIST, K_DRIFT, K_TURN, K_TURN_POS};
-use super::covariance::{add_noise, propagate};
-use super::Estimator;
-use crate::math::{mul_hi, mul_q30_unsat, Dt};
+use super::constants::{
+    BIAS_WALK, D_OVER_L_Q31, FLOOR_HEADING, FLOOR_POS, K_BIAS_MM, K_DIST, K_DRIFT, K_PIVOT, K_TURN, P0_BIAS,
+    P0_HEADING, P0_POS, P0_SPEED, P0_TURN, RAD_Q28_PER_LSB, SCALE_ONE, SCALE_WALK,
+};
+use super::covariance::{Covariance, BIAS, CCW, CW, SPEED, T, X, Y};
+use crate::math::{mul_hi, Angle, Coord, Dt, Speed, TurnRate};
 use crate::model::actuator::Motion;
-use crate::model::state::advance;
+use crate::model::state::{advance, Pose};
 
-impl Estimator {
-    /// Moves the pose by `motion` held for `dt` and grows the uncertainty.
-    pub fn predict(&mut self, motion: Motion, dt: Dt) {
-        let p = &mut self.p;
+/// The learned scales of the actuator lines, Q29 (1 = the lines).
+#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
+pub struct Scales {
+    pub speed: i32,
+    pub cw: i32,
+    pub ccw: i32,
+}
+
+impl Scales {
+    pub const ONE: Scales = Scales { speed: SCALE_ONE, cw: SCALE_ONE, ccw: SCALE_ONE };
+
+    /// The motion the car makes for the lines' `motion`, by these scales.
+    pub fn apply(&self, motion: Motion) -> Motion {
         match motion {
-            Motion::Stop => {}
+            Motion::Stop => Motion::Stop,
+            // |bits| <= Speed::MAX < 2^23: << 8 fits; times a Q29 scale below
+            // 4 (>> 5 of mul_hi's Q37) kept within Speed::MAX, which
+            // `Speed::distance_q24` is sized for
             Motion::Straight(v) => {
-                // the heading does not change: the pose's cached sin/cos are
-                // those of the step's heading, before and after
-                let (s, c) = self.pose.sin_cos();
-                advance(&mut self.pose, motion, dt);
-                // |d| <= 65.5 mm in Q24 < 2^31 (Speed::MAX over Dt::MAX)
-                let d = v.distance_q24(dt);
-                // F: dx/d(L theta) = -d s / L, dy/d(L theta) = d c / L; in Q30
-                // that is exactly mul_hi(d Q24, s Q30) (2^30 / (2^22 * 256) = 1):
-                // |f| <= 65.5 / 256 < 2^-2 (Q30: < 2^28).
-                let f1 = -mul_hi(d, s);
-                let f2 = mul_hi(d, c);
-                propagate(p, f1, f2);
-                // Q: distance noise along (c, s), heading drift. |d| < 2^31,
-                // K_DIST < 2^21: var_d < 2^20, so every Q30 product below is
-                // far inside i32.
-                let ad = d.wrapping_abs(); // |d| < 2^31 (above): no wrap
-                add_noise(p, mul_hi(ad, K_DIST), c, s);
-                p.tt = p.tt.saturating_add(mul_hi(ad, K_DRIFT));
+                let max = Speed::MAX.to_bits();
+                let bits = mul_hi(v.to_bits().clamp(-max, max) << 8, self.speed) >> 5;
+                Motion::Straight(Speed::from_bits(bits.clamp(-max, max)))
             }
-            Motion::Turn(_) => {
+            Motion::Turn(w) => {
+                let s = if w.to_bits() >= 0 { self.cw } else { self.ccw };
+                let max = TurnRate::MAX.to_bits();
+                Motion::Turn(TurnRate::from_bits(mul_hi(w.to_bits(), s).saturating_mul(8).clamp(-max, max)))
+            }
+        }
+    }
+}
+
+/// Where the position is kept: within the arena's margin, whole mm (see
+/// `Estimator::with_arena`).
+#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
+pub(super) struct Bounds {
+    pub low_mm: i32,
+    pub high_x_mm: i32,
+    pub high_y_mm: i32,
+}
+
+/// One hypothesis: an extended Kalman filter over the pose, the actuator
+/// lines' scales and the compass's bias (see [`super::covariance::N`]).
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub struct Filter {
+    pub(super) pose: Pose,
+    pub(super) scales: Scales,
+    /// What the compass reads beyond the heading.
+    pub(super) bias: Angle,
+    pub(super) p: Covariance,
+}
+
+impl Filter {
+    /// At `pose` with the config's initial uncertainty, the scales at 1 and
+    /// no bias.
+    pub(super) fn new(pose: Pose) -> Filter {
+        Filter {
+            pose,
+            scales: Scales::ONE,
+            bias: Angle::ZERO,
+            p: Covariance::diagonal_of([P0_POS, P0_POS, P0_HEADING, P0_SPEED, P0_TURN, P0_TURN, P0_BIAS]),
+        }
+    }
+
+    /// Moves the pose by `motion` (the lines' motion, scaled by this
+    /// hypothesis's scales) held for `dt` and grows the uncertainty.
+    pub(super) fn predict(&mut self, motion: Motion, dt: Dt, bounds: &Bounds) {
+        let scaled = self.scales.apply(motion);
+        let dt_us = dt.as_micros();
+        let p = &mut self.p;
+        match (motion, scaled) {
+            (Motion::Straight(v0), Motion::Straight(v)) => {
+                // the heading does not change: the cached sin/cos are the step's
+                let (s, c) = self.pose.sin_cos();
+                advance(&mut self.pose, scaled, dt);
+                // |d| <= 65.5 mm in Q24 (Speed::MAX over Dt::MAX) times the
+                // scale (< 4): below 2^31 but for the last bit, saturated
+                let d0 = v0.distance_q24(dt);
+                let d = v.distance_q24(dt);
+                // F: dx/d(L theta) = -d s / L (Q30: mul_hi(d Q24, s Q30), as
+                // 2^30 / (2^22 * 256) = 1), and dx/d(L scale) = d0 c / L alike.
+                p.shear(X, (T, -mul_hi(d, s)), (SPEED, mul_hi(d0, c)));
+                p.shear(Y, (T, mul_hi(d, c)), (SPEED, mul_hi(d0, s)));
+                // Q: distance noise along (c, s), heading drift, the bias's
+                // walk over the floor, the scale's drift.
+                let ad = d0.wrapping_abs(); // |d0| < 2^31 (above): no wrap
+                p.add_outer(mul_hi(ad, K_DIST), [X, Y], [c, s]);
+                p.add(T, T, mul_hi(ad, K_DRIFT));
+                p.add(BIAS, BIAS, mul_hi(ad, K_BIAS_MM));
+                p.add(SPEED, SPEED, (SCALE_WALK.wrapping_mul(dt_us) >> 16) as i32);
+            }
+            (Motion::Turn(w0), Motion::Turn(_)) => {
                 let before = self.pose.theta;
-                // both cached: the last step's new heading, and this one's
-                // (`advance` stores it)
                 let (s0, c0) = self.pose.sin_cos();
-                advance(&mut self.pose, motion, dt);
+                advance(&mut self.pose, scaled, dt);
                 let (s1, c1) = self.pose.sin_cos();
                 // The turn (model::state): x' = x - D (c0 - c1), y' = y - D (s0 - s1):
-                // dx'/dtheta = D (s0 - s1), dy'/dtheta = D (c1 - c0). Halves
-                // of Q30 values keep the differences in i32 (Q29); D/L Q31
-                // times Q29 gives Q28 from mul_hi, hence the << 2:
-                // |f| <= 2 D / L < 7/16 (D < 64 mm, asserted): < 2^29 in Q30.
+                // dx'/dtheta = D (s0 - s1), dy'/dtheta = D (c1 - c0); halves of
+                // Q30 keep the differences in i32 (Q29), D/L Q31 times Q29 is
+                // Q28 from mul_hi, hence the << 2: below 7/16 in Q30.
                 let f1 = mul_hi(D_OVER_L_Q31, (s0 >> 1) - (s1 >> 1)) << 2;
                 let f2 = mul_hi(D_OVER_L_Q31, (c1 >> 1) - (c0 >> 1)) << 2;
-                propagate(p, f1, f2);
-                // Q: the turned angle's noise enters through G = (-D s1 / L, D c1 / L, 1)
-                // (|g| < 2^28 in Q30); |turned| <= 2^31, K_TURN < 2^23: vt < 2^22.
-                // The position block also gets the pivot's own uncertainty
-                // (the skid drags), across the car like g: K_TURN_POS < 2^30
-                // (asserted), so vpos < 2^29.
-                let turned = self.pose.theta.diff(before).saturating_abs();
-                let vt = mul_hi(turned, K_TURN);
-                let vpos = mul_hi(turned, K_TURN_POS);
+                // The turn's direction G = (-D s1 / L, D c1 / L, 1) (Q30, the
+                // position entries below 2^28): the turned angle's noise and,
+                // times the commanded angle a0, the scale's column.
                 let g1 = -(mul_hi(D_OVER_L_Q31, s1) << 1);
                 let g2 = mul_hi(D_OVER_L_Q31, c1) << 1;
-                add_noise(p, vpos, g1, g2);
-                p.xt = p.xt.saturating_add(mul_q30_unsat(vt, g1));
-                p.yt = p.yt.saturating_add(mul_q30_unsat(vt, g2));
-                p.tt = p.tt.saturating_add(vt);
+                // a0: the lines' angle this step, |a0| < 2^30 LSB (TurnRate::MAX
+                // over Dt::MAX); in rad Q30 below 1.6 (the shear clamps at 1/2:
+                // a step turns 0.2 rad at 3 rad/s for 65 ms)
+                let a0 = w0.rotation(dt).0 .0 as i32;
+                let a_rad = mul_hi(a0, RAD_Q28_PER_LSB).saturating_mul(4);
+                let scale = if w0.to_bits() >= 0 { CW } else { CCW };
+                // x and y read the heading and the scale before the heading
+                // moves (the shears compose to I + F's off-diagonal part)
+                p.shear(X, (T, f1), (scale, crate::math::mul_q30(a_rad, g1)));
+                p.shear(Y, (T, f2), (scale, crate::math::mul_q30(a_rad, g2)));
+                p.shear(T, (scale, a_rad), (BIAS, 0));
+                // Q: the turned angle's noise along G; the pivot's across the
+                // car (unit (-s1, c1)); the scale's drift.
+                // (per angle turned: |turned| <= 2^31, the factors below
+                // 2^31, so each variance below 2^30; the conditioning caps)
+                let turned = self.pose.theta.diff(before).saturating_abs();
+                p.add_outer(mul_hi(turned, K_TURN), [X, Y, T], [g1, g2, 1 << 30]);
+                p.add_outer(mul_hi(turned, K_PIVOT), [X, Y], [-s1, c1]);
+                p.add(scale, scale, (SCALE_WALK.wrapping_mul(dt_us) >> 16) as i32);
             }
+            _ => {}
         }
-        // Floors: dt <= 65535 us, so the products fit u32 (asserted above).
-        let dt = dt.as_micros();
-        let fp = (FLOOR_POS.wrapping_mul(dt) >> 16) as i32;
-        let fh = (FLOOR_HEADING.wrapping_mul(dt) >> 16) as i32;
-        p.xx = p.xx.saturating_add(fp);
-        p.yy = p.yy.saturating_add(fp);
-        p.tt = p.tt.saturating_add(fh);
-        self.condition();
+        // Floors and the bias's walk in time: dt <= 65535 us, the products
+        // fit u32 (asserted).
+        let fp = (FLOOR_POS.wrapping_mul(dt_us) >> 16) as i32;
+        p.add(X, X, fp);
+        p.add(Y, Y, fp);
+        p.add(T, T, (FLOOR_HEADING.wrapping_mul(dt_us) >> 16) as i32);
+        p.add(BIAS, BIAS, (BIAS_WALK.wrapping_mul(dt_us) >> 16) as i32);
+        // (a congruence and noise keep the correlations valid: the diagonal's
+        // upkeep only; the long-run test checks P positive definite every tick)
+        p.condition_diagonal();
         if motion != Motion::Stop {
-            self.keep_in_arena();
+            self.keep_in(bounds);
         }
+    }
+
+    /// Keeps the position within the bounds, to the whole mm (a projection
+    /// onto what the position can be; the covariance is left alone).
+    pub(super) fn keep_in(&mut self, b: &Bounds) {
+        clamp_mm(&mut self.pose.x, b.low_mm, b.high_x_mm);
+        clamp_mm(&mut self.pose.y, b.low_mm, b.high_y_mm);
+    }
+}
+
+/// [`Filter::keep_in`] for one coordinate: into `[low, high]` mm by its
+/// high word (`|c| < 2^63`: it fits). (For bounds the wrong way round the
+/// upper wins: no panic.)
+#[inline(always)]
+pub(super) fn clamp_mm(c: &mut Coord, low: i32, high: i32) {
+    let mm = (c.0 >> 32) as i32;
+    if mm < low {
+        *c = Coord(i64::from(low) << 32);
+    }
+    if mm >= high {
+        *c = Coord(i64::from(high) << 32);
     }
 }

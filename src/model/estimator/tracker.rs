@@ -1,0 +1,400 @@
+//! The multi-hypothesis tracker: every reading corrects every hypothesis
+//! and weighs it; the weak are pruned, near twins merged; a sensor that
+//! keeps disagreeing with the best while the robot moves seeds a new
+//! hypothesis that takes its side (a local re-search); the reported pose
+//! follows the best only while it dominates, and then at a bounded pace
+//! (see the module docs of [`super`], "No teleports").
+
+use super::constants::{
+    AMBIGUOUS_GAP_Q16, CATCH_UP_MAX_Q16, CATCH_UP_PER_MM_Q16, CATCH_UP_PER_US, CATCH_UP_STANDING_Q16, DOMINATE_Q8,
+    EVIDENCE_PERIOD_US, EVIDENCE_Q16, LOCATED_VAR, MERGE_LSB, MERGE_Q16, OUTLIER_COST_Q8, PRUNE_Q8, P_MAX, P_RESEARCH,
+    R_COMPASS, SPAWN_Q8,
+};
+use super::covariance::{BIAS, T, X, Y};
+use super::predict::Filter;
+use super::update::Outcome;
+use super::{Estimator, Sensor, Tracking, Update};
+use crate::config::estimator as cfg;
+use crate::math::{mul_hi, Angle, Coord, Dt, Length};
+use crate::model::actuator::Motion;
+use crate::model::measurement::LidarId;
+use crate::model::state::advance;
+
+/// The travel a turn counts as, mm per radian (its arc at 100 mm), as a
+/// factor on angle LSB for `mul_hi`: 100 * 2 pi * 2^16 (Q16 mm) per 2^32 LSB
+/// times 2^32 / 2^6 (the `<< 6` after): 100 2 pi 2^10.
+const TURN_TRAVEL: i32 = 643_398;
+
+/// One sensor's evidence: the odometer and clock when its last reading counted, and
+/// its counted disagreements with the best hypothesis in a row.
+#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug, Default)]
+pub(super) struct Evidence {
+    pub counted_at: i32,
+    /// The estimator's clock then, us.
+    pub counted_us: u32,
+    pub fresh: bool,
+    pub disagreements: u8,
+}
+
+/// What a lidar reading did to the best hypothesis, kept for a re-search.
+struct Disagreement {
+    which: LidarId,
+    distance: Length,
+}
+
+impl Estimator {
+    /// Live hypotheses and their costs.
+    pub(super) fn live_mut(&mut self) -> impl Iterator<Item = (&mut Filter, &mut i32)> {
+        self.hyps.iter_mut().zip(self.costs.iter_mut()).take(self.live)
+    }
+
+    pub(super) fn best_filter(&self) -> &Filter {
+        self.hyps.get(self.best).unwrap_or(&self.hyps[0])
+    }
+
+    /// Moves every hypothesis and the reported pose by `motion` for `dt`.
+    pub(super) fn predict_all(&mut self, motion: Motion, dt: Dt) {
+        let bounds = self.bounds;
+        for (h, _) in self.live_mut() {
+            h.predict(motion, dt, &bounds);
+        }
+        // the travel: |d| for a straight step, the arc at 100 mm for a turn
+        let travel = match motion {
+            Motion::Stop => 0,
+            Motion::Straight(v) => (v.distance_q24(dt) >> 8).wrapping_abs(),
+            Motion::Turn(w) => mul_hi((w.rotation(dt).0 .0 as i32).wrapping_abs(), TURN_TRAVEL) << 6,
+        };
+        self.odometer = self.odometer.wrapping_add(travel);
+        self.clock_us = self.clock_us.wrapping_add(dt.as_micros());
+        let scales = self.best_filter().scales;
+        advance(&mut self.reported, scales.apply(motion), dt);
+        if motion == Motion::Stop {
+            if !self.standing {
+                self.slack = self.slack.min(CATCH_UP_STANDING_Q16);
+                self.standing = true;
+            }
+        } else {
+            self.standing = false;
+            let more = mul_hi(travel << 1, CATCH_UP_PER_MM_Q16 << 15)
+                .saturating_add((CATCH_UP_PER_US.wrapping_mul(dt.as_micros()) >> 8) as i32);
+            self.slack = self.slack.saturating_add(more).min(CATCH_UP_MAX_Q16);
+        }
+        self.follow();
+    }
+
+    /// Whether a reading of `sensor` counts as new evidence (the robot moved
+    /// far enough since its last counted one, or long enough passed); if so
+    /// it is the last. While
+    /// `Unknown` every reading counts: a typed guess does not hold against
+    /// the sensors.
+    fn counts(&mut self, sensor: Sensor) -> bool {
+        let (odometer, clock, unknown) = (self.odometer, self.clock_us, self.tracking == Tracking::Unknown);
+        let e = self.evidence_of(sensor);
+        let new = unknown
+            || e.fresh
+            || odometer.wrapping_sub(e.counted_at) >= EVIDENCE_Q16
+            || clock.wrapping_sub(e.counted_us) >= EVIDENCE_PERIOD_US;
+        if new {
+            (e.counted_at, e.counted_us, e.fresh) = (odometer, clock, false);
+        }
+        new
+    }
+
+    fn evidence_of(&mut self, sensor: Sensor) -> &mut Evidence {
+        match sensor {
+            Sensor::Front => &mut self.evidence.front,
+            Sensor::Right => &mut self.evidence.right,
+            Sensor::Compass => &mut self.evidence.compass,
+        }
+    }
+
+    /// A lidar's reading through every hypothesis.
+    pub(super) fn lidar_all(&mut self, which: LidarId, distance: Length) -> Update {
+        let counted = self.counts(Sensor::of(which));
+        let (arena, bounds, best) = (self.arena, self.bounds, self.best);
+        let (mut result, mut possible, mut repairs) = (Update::Unusable, false, 0u32);
+        for (i, (h, cost)) in self.live_mut().enumerate() {
+            let (outcome, ok) = match h.lidar_reading(&arena, which, distance) {
+                None => (Outcome { update: Update::Unusable, nis_q8: 0, nu: 0 }, false),
+                Some(r) => {
+                    let (o, rep) = h.correct(r.row, r.nu, r.r, &bounds);
+                    repairs = repairs.saturating_add(rep);
+                    (o, r.possible)
+                }
+            };
+            // a reading no position in the arena gives weighs nothing
+            if counted && (ok || outcome.update == Update::Accepted) {
+                *cost = cost.saturating_add(weight_of(outcome));
+            }
+            if i == best {
+                (result, possible) = (outcome.update, ok);
+            }
+        }
+        self.stats.repairs = self.stats.repairs.saturating_add(repairs);
+        if self.disagreed(Sensor::of(which), result, possible && counted) {
+            self.research_lidar(Disagreement { which, distance });
+        }
+        self.settle();
+        result
+    }
+
+    /// The compass's reading through every hypothesis.
+    pub(super) fn heading_all(&mut self, heading: Angle) -> Update {
+        let counted = self.counts(Sensor::Compass);
+        let (bounds, best) = (self.bounds, self.best);
+        let (mut result, mut repairs) = (Update::Unusable, 0u32);
+        for (i, (h, cost)) in self.live_mut().enumerate() {
+            let (o, rep) = h.update_heading(heading, &bounds);
+            repairs = repairs.saturating_add(rep);
+            if counted {
+                *cost = cost.saturating_add(weight_of(o));
+            }
+            if i == best {
+                result = o.update;
+            }
+        }
+        self.stats.repairs = self.stats.repairs.saturating_add(repairs);
+        if self.disagreed(Sensor::Compass, result, counted) {
+            self.research_compass(heading);
+        }
+        self.settle();
+        result
+    }
+
+    /// Counts a disagreement of `sensor` with the best hypothesis (only
+    /// readings that count as new evidence and could come from the arena:
+    /// `counts`); true when the run reaches [`cfg::RESEARCH_AFTER`] (and
+    /// restarts it), or at once for a standing robot (its one piece of
+    /// evidence until it moves: the new hypotheses are weighed on every
+    /// sensor's next reading, and a spurious reading's is refuted there).
+    fn disagreed(&mut self, sensor: Sensor, result: Update, counts: bool) -> bool {
+        let standing = self.standing;
+        let e = self.evidence_of(sensor);
+        match result {
+            Update::Accepted => e.disagreements = 0,
+            Update::Outlier if counts && standing => e.disagreements = cfg::RESEARCH_AFTER,
+            Update::Outlier if counts => e.disagreements = e.disagreements.saturating_add(1),
+            _ => {}
+        }
+        if e.disagreements >= cfg::RESEARCH_AFTER {
+            e.disagreements = 0;
+            true
+        } else {
+            false
+        }
+    }
+
+    /// A local re-search for a lidar that keeps disagreeing: a copy of the
+    /// best with its position uncertain (`cfg::RESEARCH_SIGMA_MM` on each
+    /// axis, uncorrelated) takes the reading; if even that gate refuses it,
+    /// the copy moves along the wall's normal to where the reading puts it.
+    #[cold]
+    #[inline(never)]
+    fn research_lidar(&mut self, d: Disagreement) {
+        let (arena, bounds) = (self.arena, self.bounds);
+        let mut h = *self.best_filter();
+        for axis in [X, Y] {
+            h.p.set(axis, axis, h.p.get(axis, axis).max(P_RESEARCH));
+            h.p.decouple(axis);
+        }
+        let Some(r) = h.lidar_reading(&arena, d.which, d.distance) else { return };
+        if h.correct(r.row, r.nu, r.r, &bounds).0.update != Update::Accepted {
+            let step = Coord::from_length(Length(if r.toward_high { r.nu } else { r.nu.saturating_neg() }));
+            let c = if r.axis == X { &mut h.pose.x } else { &mut h.pose.y };
+            *c = Coord(c.0.saturating_add(step.0));
+            h.keep_in(&bounds);
+            if let Some(r) = h.lidar_reading(&arena, d.which, d.distance) {
+                h.correct(r.row, r.nu, r.r, &bounds);
+            }
+        }
+        self.stats_of(Sensor::of(d.which)).researched += 1;
+        self.spawn(h);
+    }
+
+    /// A local re-search for a compass that keeps disagreeing: either the
+    /// heading is lost (a copy with the heading as uncertain as kept and the
+    /// position by `cfg::RESEARCH_SIGMA_MM`, taking the reading) or the compass's bias moved (a copy with the bias as
+    /// uncertain, taking it). The lidars decide between them and the best.
+    #[cold]
+    #[inline(never)]
+    fn research_compass(&mut self, heading: Angle) {
+        let bounds = self.bounds;
+        for state in [T, BIAS] {
+            let mut h = *self.best_filter();
+            let (row, nu) = h.compass_reading(heading);
+            // at the cap (57 degrees one sigma) the gate passes half a turn:
+            // the correction takes the reading
+            h.p.set(state, state, P_MAX);
+            h.p.decouple(state);
+            if state == T {
+                // what lost the heading (a held turn, the skid) moved the
+                // position too: the lidars then place it afresh
+                for axis in [X, Y] {
+                    h.p.set(axis, axis, h.p.get(axis, axis).max(P_RESEARCH));
+                    h.p.decouple(axis);
+                }
+            }
+            h.correct(row, nu, R_COMPASS, &bounds);
+            self.spawn(h);
+        }
+        self.stats.compass.researched += 1;
+    }
+
+    /// Adds `h` behind the best by [`cfg::SPAWN_COST`], in a free slot or in
+    /// place of the costliest other hypothesis.
+    fn spawn(&mut self, h: Filter) {
+        let cost = self.costs.get(self.best).copied().unwrap_or(0).saturating_add(SPAWN_Q8);
+        let slot = if self.live < self.hyps.len() {
+            self.live += 1;
+            self.live - 1
+        } else {
+            let best = self.best;
+            let worst = self.costs.iter().enumerate().filter(|&(i, _)| i != best).max_by_key(|&(_, c)| *c);
+            match worst {
+                Some((i, _)) => i,
+                None => return,
+            }
+        };
+        if let (Some(f), Some(c)) = (self.hyps.get_mut(slot), self.costs.get_mut(slot)) {
+            (*f, *c) = (h, cost);
+        }
+        // a new hypothesis is weighed on every sensor's next reading
+        self.evidence = super::EvidenceSet::FRESH;
+        self.stats.spawned = self.stats.spawned.saturating_add(1);
+    }
+
+    /// After a correction: costs relative to the best, the weak pruned, near
+    /// twins merged, the tracking state, and the reported pose's catch-up.
+    pub(super) fn settle(&mut self) {
+        let min = self.costs.iter().take(self.live).copied().min().unwrap_or(0);
+        for c in self.costs.iter_mut().take(self.live) {
+            *c = c.saturating_sub(min);
+        }
+        let mut i = 0;
+        while i < self.live {
+            let cost = self.costs.get(i).copied().unwrap_or(0);
+            let twin = (0..self.live)
+                .any(|j| j != i && self.twins(i, j) && self.cost(j) <= cost && (self.cost(j) < cost || j < i));
+            if cost > PRUNE_Q8 || twin {
+                self.remove(i);
+            } else {
+                i += 1;
+            }
+        }
+        let (best, second) = self.two_best();
+        self.best = best;
+        let dominant = second.is_none_or(|c| c.saturating_sub(self.cost(best)) >= DOMINATE_Q8);
+        self.dominant = dominant;
+        let was = self.tracking;
+        if was == Tracking::Unknown && dominant {
+            // the reported pose was the best's until now: it stays so
+            self.reported = self.best_filter().pose;
+        }
+        let unknown = was == Tracking::Unknown && dominant && !self.settled();
+        self.tracking = if unknown { Tracking::Unknown } else { Tracking::Ambiguous };
+        self.follow();
+        if !unknown && dominant && self.caught_up() {
+            self.tracking = Tracking::Located;
+        }
+    }
+
+    fn cost(&self, i: usize) -> i32 {
+        self.costs.get(i).copied().unwrap_or(i32::MAX)
+    }
+
+    /// The cheapest hypothesis and the next cheapest's cost.
+    fn two_best(&self) -> (usize, Option<i32>) {
+        let mut best = 0;
+        for i in 1..self.live {
+            if self.cost(i) < self.cost(best) {
+                best = i;
+            }
+        }
+        let second = (0..self.live).filter(|&i| i != best).map(|i| self.cost(i)).min();
+        (best, second)
+    }
+
+    /// Two hypotheses within [`cfg::MERGE_MM`] on each axis and
+    /// [`cfg::MERGE_DEG`] in heading.
+    fn twins(&self, i: usize, j: usize) -> bool {
+        let (Some(a), Some(b)) = (self.hyps.get(i), self.hyps.get(j)) else { return false };
+        let near = |u: Coord, v: Coord| (u.0.wrapping_sub(v.0) >> 16).unsigned_abs() < MERGE_Q16 as u64;
+        near(a.pose.x, b.pose.x)
+            && near(a.pose.y, b.pose.y)
+            && a.pose.theta.diff(b.pose.theta).unsigned_abs() < MERGE_LSB as u32
+    }
+
+    fn remove(&mut self, i: usize) {
+        let last = self.live.saturating_sub(1);
+        if self.live <= 1 || i > last || last >= self.hyps.len() {
+            return;
+        }
+        self.hyps.swap(i, last);
+        self.costs.swap(i, last);
+        self.live = last;
+    }
+
+    /// The reported position is within [`cfg::AMBIGUOUS_GAP_MM`] of the best
+    /// hypothesis's on each axis.
+    fn caught_up(&self) -> bool {
+        let best = self.best_filter().pose;
+        let near = |u: Coord, v: Coord| (u.0.wrapping_sub(v.0) >> 16).unsigned_abs() <= AMBIGUOUS_GAP_Q16 as u64;
+        near(self.reported.x, best.x) && near(self.reported.y, best.y)
+    }
+
+    /// The best hypothesis's position variances are below the config's
+    /// steering limit: an unknown start has become a located one.
+    fn settled(&self) -> bool {
+        let p = &self.best_filter().p;
+        let limit = LOCATED_VAR;
+        p.get(X, X) <= limit && p.get(Y, Y) <= limit
+    }
+
+    /// The reported pose: while the estimate is unknown it is the best's;
+    /// while one hypothesis dominates it moves toward it by at most the
+    /// slack saved up (per axis); while ambiguous it only dead-reckons.
+    pub(super) fn follow(&mut self) {
+        // tick bar: the best pose's fields, not a copy of the pose (a memcpy call)
+        let (best, best_x, best_y) = (self.best, self.best_filter().pose.x, self.best_filter().pose.y);
+        match self.tracking {
+            Tracking::Unknown => {
+                if let Some(h) = self.hyps.get(best) {
+                    self.reported = h.pose;
+                }
+            }
+            Tracking::Ambiguous if !self.dominant => {}
+            Tracking::Ambiguous | Tracking::Located => {
+                // (max/min, not clamp: clamp's panic for bounds the wrong way
+                // round would reach the image)
+                let toward = |c: Coord, to: Coord, most: i32| -> i32 {
+                    let most = i64::from(most.max(0));
+                    (to.0.wrapping_sub(c.0) >> 16).max(-most).min(most) as i32
+                };
+                let sx = toward(self.reported.x, best_x, self.slack);
+                let sy = toward(self.reported.y, best_y, self.slack);
+                self.reported.x = Coord(self.reported.x.0.wrapping_add(i64::from(sx) << 16));
+                self.reported.y = Coord(self.reported.y.0.wrapping_add(i64::from(sy) << 16));
+                self.slack = self.slack.saturating_sub(sx.saturating_abs().max(sy.saturating_abs()));
+                let b = &self.best_filter().pose;
+                (self.reported.theta, self.reported.theta_frac) = (b.theta, b.theta_frac);
+            }
+        }
+        // a located (or ambiguous) robot is inside the box; a typed pose
+        // (unknown) is kept as the hypothesis keeps it
+        if self.tracking != Tracking::Unknown {
+            let b = self.inside;
+            super::predict::clamp_mm(&mut self.reported.x, b.low_mm, b.high_x_mm);
+            super::predict::clamp_mm(&mut self.reported.y, b.low_mm, b.high_y_mm);
+        }
+    }
+}
+
+/// A reading's weight: its normalised squared innovation when accepted,
+/// [`cfg::OUTLIER_COST`] when gated out, nothing when unusable.
+fn weight_of(o: Outcome) -> i32 {
+    match o.update {
+        Update::Accepted => o.nis_q8,
+        Update::Outlier => OUTLIER_COST_Q8,
+        Update::Unusable => 0,
+    }
+}
