@@ -11,24 +11,16 @@
 //! moves more than the wheels can drive (0.30 m/s) plus 25 mm; every
 //! reported pose lies in the box.
 //!
-//! Today's estimator breaks them on some variants: those are listed in
-//! [`KNOWN_FAILURES`], awaiting the estimator's rework (issue #29 parts 2
-//! and 3); the test prints every variant's result and asserts the others.
-//! A variant that starts passing is reported so that it is taken off.
+//! The test prints every variant's result and asserts them all. (The
+//! one-hypothesis estimator with re-acquisition broke three: the compass
+//! at -10 degrees jumped 46.9 mm between rows against 44.5 allowed, and
+//! both halved drives 68-70 mm against 64.)
 
 use paperbot::config;
 use paperbot::math::Angle;
 use paperbot::model::estimator::replay::{self, Estimate, Sample};
 use paperbot::model::measurement::Arena;
 use paperbot::model::Motion;
-
-/// Variants today's estimator fails (named as [`variants`] names them),
-/// awaiting its rework (issue #29 parts 2 and 3). Measured: with the
-/// compass 10 degrees the other way the estimate jumps 46.9 mm in a 65 ms
-/// row (allowed 44.5) at rows 26-27, twice; with every other row dropped
-/// (130 ms rows) it jumps 69.5 and 68.1 mm (allowed 64.0): re-acquisition
-/// taking the sensors' side.
-const KNOWN_FAILURES: &[&str] = &["compass -10 deg", "every other row dropped", "every other row dropped, from row 1"];
 
 /// Between rows the position moves at most what the wheels can drive,
 /// 0.30 mm per ms (the protocol's fastest, `config::serial::MAX_SPEED_MM_S`),
@@ -139,35 +131,19 @@ fn violations(rows: &[Sample], est: &[Estimate]) -> Vec<String> {
 
 #[test]
 fn drive1_and_its_variants_keep_the_invariants() {
-    let mut failed_unknown = vec![];
+    let mut failed = vec![];
     for (name, rows) in variants() {
         let result = replayed(&rows).map(|est| violations(&rows, &est));
-        let known = KNOWN_FAILURES.contains(&name.as_str());
         match &result {
-            Ok(v) if v.is_empty() => {
-                println!(
-                    "{name:45} {} rows: invariants kept{}",
-                    rows.len(),
-                    if known { "  (NOW PASSES: take it off KNOWN_FAILURES)" } else { "" }
-                );
-            }
-            Ok(v) => {
-                println!(
-                    "{name:45} {} rows: {} violations{}; first: {}",
-                    rows.len(),
-                    v.len(),
-                    if known { " (known failure)" } else { "" },
-                    v[0]
-                );
-            }
-            Err(e) => println!("{name:45} {} rows: {e}{}", rows.len(), if known { " (known failure)" } else { "" }),
+            Ok(v) if v.is_empty() => println!("{name:45} {} rows: invariants kept", rows.len()),
+            Ok(v) => println!("{name:45} {} rows: {} broken, first: {}", rows.len(), v.len(), v[0]),
+            Err(e) => println!("{name:45} {} rows: {e}", rows.len()),
         }
-        let passes = matches!(&result, Ok(v) if v.is_empty());
-        if !passes && !known {
-            failed_unknown.push(name);
+        if !matches!(&result, Ok(v) if v.is_empty()) {
+            failed.push(name);
         }
     }
-    assert!(failed_unknown.is_empty(), "variants that break the invariants: {failed_unknown:?}");
+    assert!(failed.is_empty(), "variants that break the invariants: {failed:?}");
 }
 
 /// The drive itself: the first heading follows the compass, and what the
