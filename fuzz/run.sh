@@ -4,16 +4,18 @@
 #   fuzz/run.sh [SECONDS_PER_TARGET] [TARGET...]
 #
 # Default: 40 s per target (three targets, about two minutes plus the
-# build). A longer campaign by hand: `fuzz/run.sh 3600`. Needs the nightly
-# toolchain and cargo-fuzz (`cargo install cargo-fuzz --locked`).
+# build). A longer campaign by hand: `fuzz/run.sh 3600`. Needs the dated
+# nightly of xtensa/nightly (the one the image is built with) and cargo-fuzz
+# (`cargo install cargo-fuzz --locked`).
 #
 # Corpora grow in fuzz/corpus/<target>/ (not committed; kept between runs
 # on one machine) from the committed seeds in fuzz/seeds/<target>/. A
 # finding (panic, overflow, failed assertion, crash, leak, timeout) is
 # written to fuzz/artifacts/<target>/ and makes this script exit non-zero;
-# reproduce it with `cargo +nightly fuzz run <target> <artifact>`.
+# reproduce it with `cargo +$(cat xtensa/nightly) fuzz run <target> <artifact>`.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+nightly="+$(cat xtensa/nightly)"
 
 secs=${1:-40}
 shift || true
@@ -22,7 +24,7 @@ if [ ${#targets[@]} -eq 0 ]; then
   targets=(protocol_parse telemetry_roundtrip serial_loop)
 fi
 
-cargo +nightly fuzz build
+cargo "$nightly" fuzz build
 
 status=0
 summary=()
@@ -36,7 +38,7 @@ for t in "${targets[@]}"; do
   mkdir -p "fuzz/artifacts/$t"
   printf '\n-- fuzz %s for %ss\n' "$t" "$secs"
   # -timeout: one input taking over 10 s is a hang (the loop must never block)
-  if cargo +nightly fuzz run "$t" "fuzz/corpus/$t" "${seeds[@]}" -- \
+  if cargo "$nightly" fuzz run "$t" "fuzz/corpus/$t" "${seeds[@]}" -- \
     -max_total_time="$secs" -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 "${dict[@]}" >"$log" 2>&1; then
     result=ok
   else

@@ -19,6 +19,7 @@ use paperbot::control::protocol::{
 use paperbot::driver::{CompassSample, LidarSample};
 use paperbot::math::{Angle, Coord, Length, Speed, TurnRate};
 use paperbot::model::compass::{MagCounts, MagField};
+use paperbot::model::estimator::Tracking;
 use paperbot::model::{Motion, Pose, Range, ServoCmd, Trim};
 
 fn int(u: &mut Unstructured, lo: i64, hi: i64) -> Result<i64> {
@@ -147,6 +148,7 @@ fn status(u: &mut Unstructured) -> Result<Status> {
         motion: motion(u)?,
         remaining_ms: Option::<u32>::arbitrary(u)?,
         pose: pose(u)?,
+        tracking: *u.choose(&[Tracking::Located, Tracking::Ambiguous, Tracking::Unknown])?,
         left_cmd: ServoCmd::from_q8(u32::arbitrary(u)?),
         right_cmd: ServoCmd::from_q8(u32::arbitrary(u)?),
         left_trim: Trim(i16::arbitrary(u)?),

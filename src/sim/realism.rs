@@ -116,27 +116,17 @@ impl Realism {
         spurious_rate: 0.0,
         corner_mix_half_deg: 0.0,
     };
-    /// The lab's robot ([`crate::config::sim`]).
+    /// The lab's robot ([`crate::config::sim`]): its beliefs, none of the
+    /// hard world's effects.
     pub const LAB: Realism = Realism {
         whole_body: true,
         speed_spread: cfg::SPEED_SPREAD,
         pivot_behind_mm: cfg::PIVOT_BEHIND_AXLE_MM,
         pivot_spread_mm: cfg::PIVOT_SPREAD_MM,
-        cone_deg: cfg::LIDAR_CONE_DEG,
         glancing_deg: cfg::GLANCING_DEG,
         spurious_share: cfg::SPURIOUS_SHARE,
         compass_disturbance_deg: cfg::COMPASS_DISTURBANCE_DEG,
-        turn_scale: (1.0, 1.0),
-        turn_drift: 0.0,
-        turn_drift_period_s: cfg::HARD_TURN_DRIFT_PERIOD_S,
-        speed_scale: 0.0,
-        pivot_run_mm: 0.0,
-        compass_wall_deg: 0.0,
-        compass_wall_decay_mm: cfg::HARD_COMPASS_WALL_DECAY_MM,
-        compass_wall_wavelength_mm: cfg::HARD_COMPASS_WALL_WAVELENGTH_MM,
-        lidar_incidence_noise: 0.0,
-        spurious_rate: 0.0,
-        corner_mix_half_deg: 0.0,
+        ..Realism::IDEAL
     };
     /// What real drives meet (issue #29; [`crate::config::sim`]'s `HARD_*`):
     /// the lab's effects, then each turn direction's rate, the speed, the
