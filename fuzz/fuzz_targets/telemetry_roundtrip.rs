@@ -138,6 +138,7 @@ fn telemetry(u: &mut Unstructured) -> Result<Telemetry> {
         left_cmd: ServoCmd::from_q8(u32::arbitrary(u)?),
         right_cmd: ServoCmd::from_q8(u32::arbitrary(u)?),
         faults: faults(u)?,
+        tracking: *u.choose(&[Tracking::Located, Tracking::Ambiguous, Tracking::Unknown])?,
     })
 }
 

@@ -11,16 +11,20 @@
 //! [`RowLog`].
 
 use crate::control::protocol::{FaultCounters, TelemetryRow};
+use crate::model::estimator::Tracking;
 use crate::model::MotionKind;
 
 /// Which optional columns a [`LogRow`] has (bits of `packed`, above the
-/// heading's 19 bits and the motion's 3).
+/// heading's 19 bits and the motion's 3; the estimator's state is the
+/// two above them).
 const FRONT_RAW: u32 = 1 << 22;
 const FRONT_D: u32 = 1 << 23;
 const RIGHT_RAW: u32 = 1 << 24;
 const RIGHT_D: u32 = 1 << 25;
 const COMPASS: u32 = 1 << 26;
 const HEADING_BITS: u32 = (1 << 19) - 1; // 360_000 < 2^19
+/// The estimator's state, two bits from here.
+const TRACKING_SHIFT: u32 = 27;
 
 /// One telemetry row, packed (see the module docs).
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
@@ -72,6 +76,11 @@ impl LogRow {
             MotionKind::Ccw => 4,
         };
         let rate = if matches!(r.motion, MotionKind::Cw | MotionKind::Ccw) { r.w_mrad_s } else { r.v_mm_s };
+        let tracking = match r.tracking {
+            Tracking::Located => 0,
+            Tracking::Ambiguous => 1,
+            Tracking::Unknown => 2,
+        };
         let flag = |present: bool, bit: u32| if present { bit } else { 0 };
         let f = &r.faults;
         LogRow {
@@ -84,7 +93,8 @@ impl LogRow {
                 | flag(r.front_dmm.is_some(), FRONT_D)
                 | flag(r.right_raw_mm.is_some(), RIGHT_RAW)
                 | flag(r.right_dmm.is_some(), RIGHT_D)
-                | flag(r.mag_raw.is_some(), COMPASS),
+                | flag(r.mag_raw.is_some(), COMPASS)
+                | tracking << TRACKING_SHIFT,
             compass_mdeg: r.compass_mdeg.unwrap_or(0),
             rate: sat16(rate),
             left_cmd_centi: r.left_cmd_centi.min(u32::from(u16::MAX)) as u16,
@@ -130,6 +140,11 @@ impl LogRow {
             mag_field: has(COMPASS).then_some(self.mag_field.map(i32::from)),
             compass_mdeg: has(COMPASS).then_some(self.compass_mdeg),
             faults: FaultCounters { bus, timeout, missing, bad_sample, rejected_outliers, overruns },
+            tracking: match (self.packed >> TRACKING_SHIFT) & 3 {
+                0 => Tracking::Located,
+                1 => Tracking::Ambiguous,
+                _ => Tracking::Unknown,
+            },
         }
     }
 }
@@ -272,6 +287,7 @@ mod tests {
                 rejected_outliers: 5,
                 overruns: 65_535,
             },
+            tracking: Tracking::Ambiguous,
         }
     }
 

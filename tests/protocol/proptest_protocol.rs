@@ -15,6 +15,7 @@ use paperbot::control::protocol::{
 use paperbot::driver::{CompassSample, LidarSample};
 use paperbot::math::{Angle, Coord, Length};
 use paperbot::model::compass::{MagCounts, MagField};
+use paperbot::model::estimator::Tracking;
 use paperbot::model::{Motion, MotionKind, Pose, Range, ServoCmd};
 use proptest::prelude::*;
 
@@ -291,27 +292,34 @@ fn any_row() -> impl Strategy<Value = TelemetryRow> {
             any::<Option<u16>>(),
             any::<Option<i32>>(),
         ),
-        (any::<Option<[i16; 3]>>(), any::<Option<[i32; 3]>>(), any::<Option<u32>>(), faults()),
+        (any::<Option<[i16; 3]>>(), any::<Option<[i32; 3]>>(), any::<Option<u32>>(), faults(), tracking()),
     )
-        .prop_map(|((t_ms, x, y, h, motion, v, w), (lc, rc, fr, fd, rr, rd), (mr, mf, cd, faults))| TelemetryRow {
-            t_ms,
-            x_dmm: x,
-            y_dmm: y,
-            heading_mdeg: h,
-            motion,
-            v_mm_s: v,
-            w_mrad_s: w,
-            left_cmd_centi: lc,
-            right_cmd_centi: rc,
-            front_raw_mm: fr,
-            front_dmm: fd,
-            right_raw_mm: rr,
-            right_dmm: rd,
-            mag_raw: mr,
-            mag_field: mf,
-            compass_mdeg: cd,
-            faults,
+        .prop_map(|((t_ms, x, y, h, motion, v, w), (lc, rc, fr, fd, rr, rd), (mr, mf, cd, faults, tracking))| {
+            TelemetryRow {
+                t_ms,
+                x_dmm: x,
+                y_dmm: y,
+                heading_mdeg: h,
+                motion,
+                v_mm_s: v,
+                w_mrad_s: w,
+                left_cmd_centi: lc,
+                right_cmd_centi: rc,
+                front_raw_mm: fr,
+                front_dmm: fd,
+                right_raw_mm: rr,
+                right_dmm: rd,
+                mag_raw: mr,
+                mag_field: mf,
+                compass_mdeg: cd,
+                faults,
+                tracking,
+            }
         })
+}
+
+fn tracking() -> impl Strategy<Value = Tracking> {
+    prop_oneof![Just(Tracking::Located), Just(Tracking::Ambiguous), Just(Tracking::Unknown)]
 }
 
 fn lidar_sample() -> impl Strategy<Value = Option<LidarSample>> {
@@ -347,9 +355,9 @@ fn any_telemetry() -> impl Strategy<Value = Telemetry> {
     (
         (any::<u32>(), any::<i64>(), any::<i64>(), any::<u32>()),
         (lidar_sample(), lidar_sample(), compass_sample()),
-        (motion(), any::<u32>(), any::<u32>(), faults()),
+        (motion(), any::<u32>(), any::<u32>(), faults(), tracking()),
     )
-        .prop_map(|((t_ms, x, y, th), (front, right, compass), (motion, l, r, faults))| Telemetry {
+        .prop_map(|((t_ms, x, y, th), (front, right, compass), (motion, l, r, faults, tracking))| Telemetry {
             t_ms,
             pose: Pose::new(Coord(x), Coord(y), Angle(th)),
             front,
@@ -359,5 +367,6 @@ fn any_telemetry() -> impl Strategy<Value = Telemetry> {
             left_cmd: ServoCmd::from_q8(l),
             right_cmd: ServoCmd::from_q8(r),
             faults,
+            tracking,
         })
 }

@@ -36,6 +36,7 @@ fn quiet(t_ms: u32) -> Telemetry {
         left_cmd: ServoCmd::NEUTRAL,
         right_cmd: ServoCmd::NEUTRAL,
         faults: FaultCounters::default(),
+        tracking: Tracking::Located,
     }
 }
 
@@ -74,7 +75,7 @@ fn header() {
 
 #[test]
 fn golden_rows() {
-    assert_eq!(row_text(&quiet(0)), "0,0.0,0.0,0.000,stop,0.000,0.000,90.00,90.00,,,,,,,,,,,,0,0,0,0,0,0");
+    assert_eq!(row_text(&quiet(0)), "0,0.0,0.0,0.000,stop,0.000,0.000,90.00,90.00,,,,,,,,,,,,0,0,0,0,0,0,located");
 
     let t = Telemetry {
         t_ms: 1200,
@@ -90,10 +91,11 @@ fn golden_rows() {
         left_cmd: ServoCmd::from_int(107),
         right_cmd: ServoCmd::from_int(61),
         faults: FaultCounters { bus: 1, timeout: 2, missing: 3, bad_sample: 4, rejected_outliers: 5, overruns: 6 },
+        tracking: Tracking::Ambiguous,
     };
     assert_eq!(
         row_text(&t),
-        "1200,153.2,-4.1,11.933,fwd,0.130,0.000,107.00,61.00,412,349.5,8190,,-12,40,-3,-66,4,-3,353.117,1,2,3,4,5,6"
+        "1200,153.2,-4.1,11.933,fwd,0.130,0.000,107.00,61.00,412,349.5,8190,,-12,40,-3,-66,4,-3,353.117,1,2,3,4,5,6,ambiguous"
     );
 
     let t = Telemetry {
@@ -106,10 +108,11 @@ fn golden_rows() {
         left_cmd: ServoCmd::from_q8(15_744),
         right_cmd: ServoCmd::MAX,
         faults: FaultCounters { bus: u32::MAX, ..FaultCounters::default() },
+        tracking: Tracking::Unknown,
     };
     assert_eq!(
         row_text(&t),
-        "4294967295,0.0,0.1,270.000,ccw,0.000,-2.500,61.50,180.00,10,,120,-0.4,,,,,,,,4294967295,0,0,0,0,0"
+        "4294967295,0.0,0.1,270.000,ccw,0.000,-2.500,61.50,180.00,10,,120,-0.4,,,,,,,,4294967295,0,0,0,0,0,unknown"
     );
     let back = Telemetry { motion: Motion::Straight(Speed::from_mm_s(100).neg()), ..quiet(5) };
     assert!(row_text(&back).starts_with("5,0.0,0.0,0.000,back,-0.100,0.000,"));
@@ -136,6 +139,7 @@ fn widest_row_is_max_row() {
         mag_field: Some([-(1 << 24); 3]),
         compass_mdeg: Some(359_999),
         faults: max_faults(),
+        tracking: Tracking::Ambiguous,
     };
     let mut out: String<MAX_ROW> = String::new();
     format_row(&row, &mut out).expect("fits");
@@ -204,6 +208,7 @@ fn random_telemetry(rng: &mut Rng) -> Telemetry {
             rejected_outliers: count(rng),
             overruns: count(rng),
         },
+        tracking: [Tracking::Located, Tracking::Ambiguous, Tracking::Unknown][rng.range_u32(0, 2) as usize],
     }
 }
 
@@ -259,6 +264,7 @@ fn arbitrary_rows_round_trip() {
             mag_field: opt(&mut rng).then(|| [rng.next_u32() as i32, rng.next_u32() as i32, i32::MIN]),
             compass_mdeg: opt(&mut rng).then(|| rng.next_u32()),
             faults: FaultCounters { bus: rng.next_u32(), overruns: u32::MAX, ..FaultCounters::default() },
+            tracking: [Tracking::Located, Tracking::Ambiguous, Tracking::Unknown][rng.range_u32(0, 2) as usize],
         };
         let mut out: String<400> = String::new();
         format_row(&row, &mut out).expect("fits");
@@ -269,14 +275,14 @@ fn arbitrary_rows_round_trip() {
 #[test]
 fn bad_rows_are_refused() {
     let good =
-        "1200,153.2,-4.1,11.933,fwd,0.130,0.000,107.00,61.00,412,349.5,8190,,-12,40,-3,-66,4,-3,353.117,1,2,3,4,5,6";
+        "1200,153.2,-4.1,11.933,fwd,0.130,0.000,107.00,61.00,412,349.5,8190,,-12,40,-3,-66,4,-3,353.117,1,2,3,4,5,6,located";
     assert!(parse_telemetry_row(good).is_ok());
     assert!(parse_telemetry_row(&format!("{good}\r\n")).is_ok());
     let col = |name: &'static str| Err(RowError::Field { column: name });
     let cases: &[(std::string::String, Result<TelemetryRow, RowError>)] = &[
         (HEADER.to_string(), col("t_ms")),
         ("# ok stop".to_string(), Err(RowError::Columns { found: 1 })),
-        (format!("{good},7"), Err(RowError::Columns { found: 27 })),
+        (format!("{good},7"), Err(RowError::Columns { found: 28 })),
         (good.replacen("1200", "-1200", 1), col("t_ms")),
         (good.replacen("1200", "4294967296", 1), col("t_ms")),
         (good.replacen("153.2", "153.25", 1), col("x_mm")),
@@ -286,7 +292,8 @@ fn bad_rows_are_refused() {
         (good.replacen(",-12,", ",,", 1), col("mag_x")),
         (good.replacen(",40,", ",40000,", 1), col("mag_y")),
         (good.replacen("353.117", "-353.117", 1), col("compass_deg")),
-        (format!("{},x", good.strip_suffix(",6").expect("ends in 6")), col("f_overruns")),
+        (good.replacen(",6,located", ",x,located", 1), col("f_overruns")),
+        (good.replacen("located", "lost", 1), col("pose")),
     ];
     for (line, want) in cases {
         assert_eq!(&parse_telemetry_row(line), want, "{line}");

@@ -17,9 +17,9 @@ use paperbot::model::{Motion, MotionKind};
 /// The protocol docs' example row: fwd, front lidar on a target, right
 /// lidar without one (8190), compass at 353.117 degrees.
 const ROW: &str =
-    "1200,153.2,-4.1,11.933,fwd,0.130,0.000,107.00,61.00,412,349.5,8190,,-12,40,-3,-66,4,-3,353.117,0,0,0,0,0,0";
+    "1200,153.2,-4.1,11.933,fwd,0.130,0.000,107.00,61.00,412,349.5,8190,,-12,40,-3,-66,4,-3,353.117,0,0,0,0,0,0,located";
 /// A row with no fresh reading at all.
-const EMPTY_ROW: &str = "1220,153.9,-4.1,11.933,stop,0.000,0.000,90.00,90.00,,,,,,,,,,,,2,1,0,0,3,1";
+const EMPTY_ROW: &str = "1220,153.9,-4.1,11.933,stop,0.000,0.000,90.00,90.00,,,,,,,,,,,,2,1,0,0,3,1,ambiguous";
 
 fn row(line: &str) -> TelemetryRow {
     parse_telemetry_row(line).expect("test row parses")
@@ -167,9 +167,8 @@ fn driver_sends_changes_at_once_and_refreshes_a_held_motion() {
     let refresh = config::teleop::REFRESH_MS as u64;
     let mut d = Driver::from_config();
     let fwd = d.speeds().command(MotionKind::Forward);
-    assert_eq!(d.poll(0).as_deref(), Some("stop"), "the first poll sets a known state");
-    assert_eq!(d.poll(1).as_deref(), None);
-    assert_eq!(d.poll(10_000).as_deref(), None, "stop is not refreshed");
+    assert_eq!(d.poll(0).as_deref(), None, "connecting interrupts nothing (a localization in progress)");
+    assert_eq!(d.poll(10_000).as_deref(), None, "nor does standing");
     d.set(MotionKind::Forward);
     assert_eq!(d.poll(10_005), Some(fwd.clone()), "a new motion goes out at once");
     assert_eq!(d.poll(10_005 + refresh - 1), None);
@@ -182,8 +181,8 @@ fn driver_sends_changes_at_once_and_refreshes_a_held_motion() {
     assert_eq!(d.poll(10_005 + refresh + 4), None);
     d.set(MotionKind::Stop);
     assert_eq!(d.poll(10_005 + refresh + 5).as_deref(), Some("stop"));
-    assert_eq!(d.poll(20_000), None);
-    assert_eq!(d.sent(), 5);
+    assert_eq!(d.poll(20_000), None, "stop is not refreshed");
+    assert_eq!(d.sent(), 4);
     assert_eq!(d.last_sent(), Some("stop"));
 }
 
@@ -217,11 +216,11 @@ fn replay_rows_carry_commands_raw_readings_and_the_compass_heading() {
         (ROW, "1200,107.00,61.00,412,8190,353.117"),
         (EMPTY_ROW, "1220,90.00,90.00,,,"),
         (
-            "0,0.0,0.0,0.000,ccw,0.000,-2.500,63.50,43.00,20,,8191,,1,2,3,4,5,6,0.000,0,0,0,0,0,0",
+            "0,0.0,0.0,0.000,ccw,0.000,-2.500,63.50,43.00,20,,8191,,1,2,3,4,5,6,0.000,0,0,0,0,0,0,ambiguous",
             "0,63.50,43.00,20,8191,0.000",
         ),
         (
-            "4294967295,0.0,0.0,359.999,stop,0.000,0.000,180.00,0.00,,,65535,,,,,,,,359.999,0,0,0,0,0,0",
+            "4294967295,0.0,0.0,359.999,stop,0.000,0.000,180.00,0.00,,,65535,,,,,,,,359.999,0,0,0,0,0,0,unknown",
             "4294967295,180.00,0.00,,65535,359.999",
         ),
     ];
@@ -277,9 +276,14 @@ fn dashboard_shows_the_newest_row_and_counts_the_link() {
 
     let p = d.panels(20, &driver, Some("drive.csv: 1 rows"));
     let pose = panel(&p, "pose and motion");
-    for want in
-        ["t 1200 ms", "x 153.2 mm  y -4.1 mm", "heading 11.933 deg", "motion fwd  v 0.130 m/s", "L 107.00  R 61.00"]
-    {
+    for want in [
+        "t 1200 ms",
+        "x 153.2 mm  y -4.1 mm",
+        "heading 11.933 deg",
+        "estimate located",
+        "motion fwd  v 0.130 m/s",
+        "L 107.00  R 61.00",
+    ] {
         assert!(pose.contains(want), "{want:?} in\n{pose}");
     }
     let sensors = panel(&p, "sensors");
@@ -306,6 +310,8 @@ fn dashboard_shows_the_newest_row_and_counts_the_link() {
     let p = d.panels(40, &driver, None);
     assert!(panel(&p, "faults").contains("bus 2  timeout 1  missing 0"), "{}", panel(&p, "faults"));
     assert!(panel(&p, "faults").contains("outliers 3  overruns 1"));
+    // the estimator's state, as the row says it
+    assert!(panel(&p, "pose and motion").contains("estimate AMBIGUOUS: several places fit, the pose holds"));
     // an empty row keeps the newest readings on screen, with their age
     let sensors = panel(&p, "sensors");
     assert!(sensors.contains("front raw 412 mm  dist 349.5 mm  (20 ms ago)"), "{sensors}");

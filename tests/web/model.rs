@@ -14,7 +14,7 @@ use serde_json::Value;
 
 /// A row at (200, 250) mm heading north, the front lidar reading 300.0 mm
 /// and the right one 200.0 mm (distances from the reference point).
-const ROW: &str = "1000,200.0,250.0,0.000,stop,0.000,0.000,90.00,90.00,310,300.0,210,200.0,,,,,,,,0,0,0,0,1,0";
+const ROW: &str = "1000,200.0,250.0,0.000,stop,0.000,0.000,90.00,90.00,310,300.0,210,200.0,,,,,,,,0,0,0,0,1,0,unknown";
 
 fn close(a: &Value, b: f64) -> bool {
     (a.as_f64().unwrap() - b).abs() < 1e-6
@@ -59,18 +59,25 @@ fn the_uncertainty_comes_from_the_fix_and_the_state_follows_the_robot() {
     assert!(matches!(amb, Some(Fix::Located { ambiguous: true, .. })));
     assert_eq!(parse_located("# located nowhere"), None);
 
+    // the robot's state is the row's `pose` column; the `#` lines add the
+    // fix's spread and tell an unknown pose's story
     let mut live = Live::new(762.5, 495.0);
-    let state = |live: &mut Live| live.on_line(ROW, 0).0[0]["estimate"].clone();
+    let state = |live: &mut Live, tracking: &str| {
+        let row = ROW.replace(",unknown", &format!(",{tracking}"));
+        live.on_line(&row, 0).0[0]["estimate"].clone()
+    };
     let (msgs, _) = live.on_line(line, 0);
     assert_eq!(msgs[0]["type"], "message", "the answer is shown too");
-    let e = state(&mut live);
+    let e = state(&mut live, "located");
     assert_eq!(e["state"], "located");
     assert!(close(&e["sigma"]["x"], 6.0) && close(&e["sigma"]["y"], 9.0) && close(&e["sigma"]["at"]["x"], 212.0));
+    assert_eq!(state(&mut live, "ambiguous")["state"], "ambiguous", "the robot's word, whatever the last fix said");
     live.on_line("# locate failed: no fit; the pose is unknown until `pose` or `locate`", 0);
-    assert_eq!(state(&mut live)["state"], "lost");
-    assert_eq!(state(&mut live)["sigma"], Value::Null);
+    assert_eq!(state(&mut live, "unknown")["state"], "lost");
+    assert_eq!(state(&mut live, "unknown")["sigma"], Value::Null);
     live.on_line("# ok pose 100 100 0.000", 0);
-    assert_eq!(state(&mut live)["state"], "set");
+    assert_eq!(state(&mut live, "unknown")["state"], "set");
+    assert_eq!(state(&mut live, "located")["state"], "located", "then the readings narrow it");
 }
 
 #[test]

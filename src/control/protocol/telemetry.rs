@@ -6,6 +6,7 @@ use super::number::{Cursor, TextOut};
 use super::Overflow;
 use crate::driver::{CompassSample, LidarSample};
 use crate::math::Length;
+use crate::model::estimator::Tracking;
 use crate::model::{Motion, MotionKind, Pose, Range, ServoCmd};
 
 /// Error and fault counts since boot (each saturates at `u32::MAX`).
@@ -40,21 +41,24 @@ pub struct Telemetry {
     pub left_cmd: ServoCmd,
     pub right_cmd: ServoCmd,
     pub faults: FaultCounters,
+    /// How sure the estimator is of `pose`.
+    pub tracking: Tracking,
 }
 
 /// The CSV header: one name per column, units in the names.
 pub const HEADER: &str = "t_ms,x_mm,y_mm,heading_deg,motion,v_mps,w_radps,left_cmd,right_cmd,\
 front_raw_mm,front_mm,right_raw_mm,right_mm,mag_x,mag_y,mag_z,field_x,field_y,field_z,compass_deg,\
-f_bus,f_timeout,f_missing,f_bad_sample,f_outliers,f_overruns";
+f_bus,f_timeout,f_missing,f_bad_sample,f_outliers,f_overruns,pose";
 
 /// Number of columns in a row.
-pub const COLUMNS: usize = 26;
+pub const COLUMNS: usize = 27;
 
 /// Longest possible row, bytes: every column at its widest (t_ms 10,
 /// x/y 8 each, heading 7, motion 4, v 6, w 7, commands 6 each, raw
 /// readings 5 each, distances 8 each, raw mag 6 each, field 9 each
-/// (clamped to +-2^24), compass 7, counters 10 each) and 25 commas.
-pub const MAX_ROW: usize = 10 + 8 + 8 + 7 + 4 + 6 + 7 + 6 + 6 + 5 + 8 + 5 + 8 + 3 * 6 + 3 * 9 + 7 + 6 * 10 + 25;
+/// (clamped to +-2^24), compass 7, counters 10 each, the estimator's
+/// state 9) and 26 commas.
+pub const MAX_ROW: usize = 10 + 8 + 8 + 7 + 4 + 6 + 7 + 6 + 6 + 5 + 8 + 5 + 8 + 3 * 6 + 3 * 9 + 7 + 6 * 10 + 9 + 26;
 
 /// The CSV header line (print it before the first row, and again whenever
 /// telemetry is switched on).
@@ -103,6 +107,8 @@ pub struct TelemetryRow {
     /// Compass heading, millidegrees in `0..360_000`.
     pub compass_mdeg: Option<u32>,
     pub faults: FaultCounters,
+    /// The estimator's state (`located`, `ambiguous`, `unknown`).
+    pub tracking: Tracking,
 }
 
 /// A length in 0.1 mm, rounded (|result| <= 327_680): `(10 l + 2^15) >> 16`
@@ -147,6 +153,7 @@ impl From<&Telemetry> for TelemetryRow {
             mag_field: t.compass.map(|c| [c.field.x, c.field.y, c.field.z]),
             compass_mdeg: t.compass.map(|c| c.heading.to_millidegrees()),
             faults: t.faults,
+            tracking: t.tracking,
         }
     }
 }
@@ -240,6 +247,7 @@ pub fn format_row(r: &TelemetryRow, out: &mut dyn TextOut) -> Result<(), Overflo
     for count in [f.bus, f.timeout, f.missing, f.bad_sample, f.rejected_outliers, f.overruns] {
         c.unsigned(count, 0)?;
     }
+    c.word(r.tracking.word())?;
     c.finish()
 }
 
@@ -279,6 +287,7 @@ pub use row_parser::{parse_telemetry_row, RowError};
 mod row_parser {
     use super::super::number::{parse_fixed, parse_fixed_parts};
     use super::{FaultCounters, TelemetryRow, COLUMNS, HEADER};
+    use crate::model::estimator::Tracking;
     use crate::model::MotionKind;
 
     /// Why a line is not a telemetry row.
@@ -371,6 +380,7 @@ mod row_parser {
                 rejected_outliers: unsigned(24, 0)?,
                 overruns: unsigned(25, 0)?,
             },
+            tracking: Tracking::from_word(get(26)).ok_or(err(26))?,
         })
     }
 }

@@ -176,6 +176,7 @@ impl<H: Hardware> Controller<H> {
             left_cmd: self.applied.left,
             right_cmd: self.applied.right,
             faults: self.faults,
+            tracking: self.estimator.tracking(),
         }
     }
 }

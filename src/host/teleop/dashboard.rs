@@ -16,6 +16,7 @@ use std::vec::Vec;
 use super::drive::Driver;
 use crate::config;
 use crate::control::protocol::{classify_line, parse_telemetry_row, telemetry, LineKind, TelemetryRow, ERR, OK};
+use crate::model::estimator::Tracking;
 use crate::model::MotionKind;
 
 /// A titled box of text lines.
@@ -183,6 +184,11 @@ impl Dashboard {
                     format!("t {} ms", r.t_ms),
                     format!("x {} mm  y {} mm", dmm(r.x_dmm), dmm(r.y_dmm)),
                     format!("heading {} deg", milli(r.heading_mdeg as i32)),
+                    match r.tracking {
+                        Tracking::Located => "estimate located".to_string(),
+                        Tracking::Ambiguous => "estimate AMBIGUOUS: several places fit, the pose holds".to_string(),
+                        Tracking::Unknown => "estimate UNKNOWN: locate (r) or pose".to_string(),
+                    },
                     format!(
                         "motion {}  v {} m/s  w {} rad/s",
                         telemetry::motion_word(r.motion),

@@ -6,7 +6,10 @@
 //! deadman): any valid command refreshes the deadman, so the robot keeps
 //! moving while the tool runs and stops within
 //! [`config::timing::DEADMAN_MS`] when the tool, the cable or the laptop
-//! dies. `stop` is sent once (the deadman does not need it refreshed).
+//! dies. `stop` is sent once (the deadman does not need it refreshed),
+//! and not at all until the user has driven: connecting does not
+//! interrupt what the robot is doing (its power-up localization, say; a
+//! motion left over from before stops at its deadman).
 
 use std::string::String;
 
@@ -63,7 +66,7 @@ impl Driver {
     pub fn poll(&mut self, now_ms: u64) -> Option<String> {
         let cmd = self.command();
         let due = match &self.last {
-            None => true,
+            None => self.want != MotionKind::Stop,
             Some((last, at)) => {
                 *last != cmd || (self.want != MotionKind::Stop && now_ms.saturating_sub(*at) >= self.refresh_ms)
             }

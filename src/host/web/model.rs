@@ -32,6 +32,7 @@ use serde_json::{json, Value};
 use super::super::teleop::{Dashboard, Driver};
 use crate::config;
 use crate::control::protocol::{telemetry, LineKind, TelemetryRow};
+use crate::model::estimator::Tracking;
 use crate::model::lidar::LidarMount;
 
 /// A pose as the page draws it: mm (x north, y east) and heading in
@@ -215,15 +216,22 @@ impl Live {
         }
     }
 
-    fn estimate(&self, pose: &MapPose) -> Value {
-        let (state, sigma) = match self.fix {
-            Fix::Unknown => ("unknown", Value::Null),
-            Fix::Lost => ("lost", Value::Null),
-            Fix::Set => ("set", Value::Null),
-            Fix::Located { pose: at, sigma_x, sigma_y, ambiguous, t_ms } => (
-                if ambiguous { "ambiguous" } else { "located" },
-                json!({ "x": sigma_x, "y": sigma_y, "at": pose_json(&at), "t_ms": t_ms }),
-            ),
+    /// The estimate's state: the row's (how sure the estimator is now),
+    /// told apart by the robot's last `#` line where the row says unknown
+    /// (a failed localization, a typed pose); the spread of the last fix.
+    fn estimate(&self, pose: &MapPose, tracking: Tracking) -> Value {
+        let state = match (tracking, self.fix) {
+            (Tracking::Located, _) => "located",
+            (Tracking::Ambiguous, _) => "ambiguous",
+            (Tracking::Unknown, Fix::Lost) => "lost",
+            (Tracking::Unknown, Fix::Set) => "set",
+            (Tracking::Unknown, _) => "unknown",
+        };
+        let sigma = match self.fix {
+            Fix::Located { pose: at, sigma_x, sigma_y, t_ms, .. } => {
+                json!({ "x": sigma_x, "y": sigma_y, "at": pose_json(&at), "t_ms": t_ms })
+            }
+            _ => Value::Null,
         };
         let mut e = pose_json(pose);
         if let Some(o) = e.as_object_mut() {
@@ -250,7 +258,7 @@ impl Live {
         json!({
             "type": "row",
             "t_ms": r.t_ms,
-            "estimate": self.estimate(&pose),
+            "estimate": self.estimate(&pose, r.tracking),
             "motion": telemetry::motion_word(r.motion),
             "v": f64::from(r.v_mm_s) / 1000.0,
             "w": f64::from(r.w_mrad_s) / 1000.0,

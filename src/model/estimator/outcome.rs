@@ -16,13 +16,18 @@ pub enum Update {
 }
 
 impl Tracking {
-    /// One word for `status`: `located`, `ambiguous`, `unknown`.
+    /// One word for `status` and telemetry: `located`, `ambiguous`, `unknown`.
     pub fn word(self) -> &'static str {
         match self {
             Tracking::Located => "located",
             Tracking::Ambiguous => "ambiguous",
             Tracking::Unknown => "unknown",
         }
+    }
+
+    /// The state a [`Self::word`] names.
+    pub fn from_word(word: &str) -> Option<Tracking> {
+        [Tracking::Located, Tracking::Ambiguous, Tracking::Unknown].into_iter().find(|t| t.word() == word)
     }
 }
 
