@@ -82,7 +82,7 @@
 //!   `D P D`); after a correction (the step whose rounding can break it) a
 //!   correlation past 1 is clamped and counted in
 //!   [`EstimatorStats::repairs`]. A prediction is a congruence plus
-//!   positive noise: `tests/estimator_longrun.rs` checks `P` positive
+//!   positive noise: `tests/estimator/longrun.rs` checks `P` positive
 //!   definite (f64 Cholesky) after every tick for hours.
 //! - No division: `1/S` by Newton's method, kept just below the exact value.
 //!   A gain of 2^9 or more (impossible for a valid `P`) is not applied.
