@@ -99,7 +99,7 @@
 //!
 //! # Cost (lx106: no 32x32->64 multiply, no divide)
 //! Per call figures in `lx106/BENCHMARKS.md`, measured by `lx106/run.sh`:
-//! a control tick with one hypothesis about 11,900 instructions (the bar:
+//! a control tick with one hypothesis about 11,800 instructions (the bar:
 //! 15,000), each further hypothesis about 11,000 more (predict and correct:
 //! four are about 45,000, 5.6 % of the 10 ms tick at 80 MHz).
 
