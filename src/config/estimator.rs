@@ -136,7 +136,7 @@ pub const MAX_HYPOTHESES: usize = 4;
 pub const EVIDENCE_TRAVEL_MM: f64 = 10.0;
 /// And once this long has passed since that sensor's last counted reading,
 /// seconds, moving or not: a body can move while its servos stand (a
-/// trimmed neutral creeps, a hand turns it; `tests/soak.rs` does both), and
+/// trimmed neutral creeps, a hand turns it; `tests/control/soak.rs` does both), and
 /// the sensors must win then too, slowly.
 pub const EVIDENCE_PERIOD_S: f64 = 1.0;
 /// Cost (a sum of normalised squared innovations) a reading the gate

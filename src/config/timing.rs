@@ -26,10 +26,10 @@ pub const SENSOR_SILENT_MS: u32 = 500;
 /// Bus errors in a row before a sensor is taken down: one glitch (e.g.
 /// a servo's current surge on the bus) only costs that sample.
 pub const SENSOR_MAX_BUS_ERRORS: u8 = 3;
-/// Estimator corrections per tick at most (each ~1,350 lx106
-/// instructions, lx106/BENCHMARKS.md). Readings that arrive together wait
-/// a tick, lidars first (a 10 ms wait at 0.15 m/s is 1.5 mm, within the
-/// lidar's 1.6 mm spread), the compass when no lidar reading waits; this
-/// keeps a tick within its 3,000-instruction budget. 3 applies every
-/// reading in the tick it arrives.
+/// Estimator corrections per tick at most (what one costs:
+/// lx106/BENCHMARKS.md). Readings that arrive together wait a tick, lidars
+/// first (a 10 ms wait at 0.15 m/s is 1.5 mm, within the lidar's 1.6 mm
+/// spread), the compass when no lidar reading waits; this keeps a tick
+/// within its instruction bar (15,000, lx106's `bar::tick_without_io`). 3
+/// applies every reading in the tick it arrives.
 pub const MAX_CORRECTIONS_PER_TICK: u8 = 1;

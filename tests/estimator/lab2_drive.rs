@@ -177,8 +177,8 @@ fn the_real_drive_replays_plausibly_with_no_start_pose() {
 /// `replay`'s agreement figures (`host::replay_stats`): from the drive's
 /// own localization the estimate accepts most readings and is not lost;
 /// started at a wrong pose with the fix's certainty it is reported lost
-/// (today's estimator takes the readings' side after ten outliers and
-/// accepts most of them, so it is their disagreement that says so).
+/// (the estimator still accepts most of the readings, so it is their
+/// disagreement that says so).
 #[test]
 fn replay_says_how_the_estimate_agrees_with_its_readings() {
     use paperbot::host::replay_stats::agreement;

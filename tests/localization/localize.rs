@@ -5,7 +5,7 @@
 //! and 5 degrees, from 95 % of random starts), wrong fixes flagged, the
 //! estimate certain enough for `goto` a second later, and what it costs in
 //! time. Measured (lab's world): 982 of 1,000 right, 13 reported
-//! ambiguous, 7 wrong and not flagged, 958 steerable; 2.5 s median, 9.7 s
+//! ambiguous, 7 wrong and not flagged, 962 steerable; 2.5 s median, 9.7 s
 //! at the 95th percentile (`cargo test --release --test localization localize:: --
 //! --nocapture` prints the figures). The hard world's (issue #29): see
 //! `the_robot_finds_itself_in_the_hard_world`.

@@ -11,13 +11,13 @@
 //! The lab's world is asserted (its figures must not get worse); the hard
 //! world's bars (median of the runs' RMS <= 15 mm, worst run's RMS <= 50
 //! mm, no collision, the invariants) are not met by today's estimator: that
-//! test is `#[ignore]`d, awaiting the estimator's rework (issue #29 parts 2
-//! and 3), and prints its figures with
+//! test is `#[ignore]`d and prints its figures with
 //! `cargo test --release --test sim hard_world:: -- --ignored --nocapture`.
 //!
 //! Measured (lab world): see `lab_world_laps_keep_their_figures`; the hard
-//! world with today's estimator: docs/simulator.md (median rms 80.7 mm,
-//! 2 runs never located, 16 with collisions, all 20 break the invariants).
+//! world with the multi-hypothesis estimator: docs/simulator.md (median rms
+//! 125.7 mm, 2 runs never located, 16 with collisions; the invariants kept
+//! by the 18 that located).
 
 use paperbot::config;
 use paperbot::control::TICK_US;

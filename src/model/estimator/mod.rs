@@ -82,7 +82,7 @@
 //!   `D P D`); after a correction (the step whose rounding can break it) a
 //!   correlation past 1 is clamped and counted in
 //!   [`EstimatorStats::repairs`]. A prediction is a congruence plus
-//!   positive noise: `tests/estimator_longrun.rs` checks `P` positive
+//!   positive noise: `tests/estimator/longrun.rs` checks `P` positive
 //!   definite (f64 Cholesky) after every tick for hours.
 //! - No division: `1/S` by Newton's method, kept just below the exact value.
 //!   A gain of 2^9 or more (impossible for a valid `P`) is not applied.
@@ -99,7 +99,7 @@
 //!
 //! # Cost (lx106: no 32x32->64 multiply, no divide)
 //! Per call figures in `lx106/BENCHMARKS.md`, measured by `lx106/run.sh`:
-//! a control tick with one hypothesis about 11,900 instructions (the bar:
+//! a control tick with one hypothesis about 11,800 instructions (the bar:
 //! 15,000), each further hypothesis about 11,000 more (predict and correct:
 //! four are about 45,000, 5.6 % of the 10 ms tick at 80 MHz).
 
