@@ -34,9 +34,11 @@ const F_TIMEOUT: usize = 21;
 const F_MISSING: usize = 22;
 const F_OVERRUNS: usize = 25;
 
-/// A telemetry row of UART0 output, split into fields.
+/// A telemetry row of UART0 output, split into fields: a time first and at
+/// least the columns read here (the firmware's header names them; columns
+/// it appends later do not matter here, as xtask cannot link its parser).
 fn row(line: &str) -> Option<Vec<&str>> {
-    Some(line.trim_end().split(',').collect::<Vec<_>>()).filter(|f| f.len() == 26 && f[0].parse::<u32>().is_ok())
+    Some(line.trim_end().split(',').collect::<Vec<_>>()).filter(|f| f.len() > F_OVERRUNS && f[0].parse::<u32>().is_ok())
 }
 
 /// Telemetry rows of a run's UART0 output.
@@ -221,6 +223,27 @@ mod tests {
         fields[0] = t_ms.to_string();
         fields[F_OVERRUNS] = overruns.to_string();
         fields.join(",")
+    }
+
+    /// The columns read here are the ones the firmware's header names there.
+    #[test]
+    fn the_columns_read_are_where_the_firmware_header_puts_them() {
+        let path = crate::image::repo_root().join("src/control/protocol/telemetry.rs");
+        let src = std::fs::read_to_string(&path).unwrap();
+        let start = src.find("pub const HEADER: &str = \"").unwrap() + 26;
+        let header = src[start..].split("\";").next().unwrap().replace("\\\n", "");
+        let names: Vec<&str> = header.split(',').collect();
+        for (col, name) in [
+            (FRONT_RAW, "front_raw_mm"),
+            (RIGHT_RAW, "right_raw_mm"),
+            (COMPASS, "compass_deg"),
+            (F_BUS, "f_bus"),
+            (F_TIMEOUT, "f_timeout"),
+            (F_MISSING, "f_missing"),
+            (F_OVERRUNS, "f_overruns"),
+        ] {
+            assert_eq!(names[col], name, "{header}");
+        }
     }
 
     #[test]
