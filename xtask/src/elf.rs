@@ -9,7 +9,9 @@
 //! - everything reachable from the level-1 interrupt entry in IRAM or ROM:
 //!   flash is mapped through a cache the flash routines switch off, so
 //!   code an interrupt reaches must not be there;
-//! - the memory budget.
+//! - the memory budget;
+//! - the flash-mapped code ends before the settings sectors
+//!   (`src/config/settings.rs`, included here as it is).
 use std::collections::{BTreeMap, BTreeSet};
 use std::fmt::Write as _;
 use std::ops::Range;
@@ -27,6 +29,16 @@ const IRAM: Range<u32> = 0x4010_0000..0x4010_8000;
 const DRAM: Range<u32> = 0x3FFE_8000..0x4000_0000;
 const ROM: Range<u32> = 0x4000_0000..0x4001_0000;
 const FLASH: Range<u32> = 0x4020_0000..0x4030_0000;
+
+/// The firmware's flash map (`config::settings`): the one file, compiled
+/// here too, so the check and the firmware agree.
+#[allow(dead_code)]
+#[path = "../../src/config/settings.rs"]
+mod settings;
+
+/// Flash offset 0 is mapped at the start of [`FLASH`] (memory.x: flash code
+/// at 0x40210000 is written at offset 0x10000).
+const FLASH_MAP_BASE: u32 = FLASH.start;
 
 /// Where the lx106 takes its exceptions, from VECBASE = 0x40100000 (the
 /// core's configuration, core-isa.h: XCHAL_*_VECOFS; exception.x).
@@ -128,6 +140,13 @@ pub fn check(path: &Path) -> Result<String, String> {
         }
     }
 
+    match check_flash_end(flash_end(&file)) {
+        Ok(line) => {
+            let _ = writeln!(report, "  {line}");
+        }
+        Err(e) => failures.push(e),
+    }
+
     if failures.is_empty() {
         Ok(report)
     } else {
@@ -184,6 +203,32 @@ fn usage(file: &object::File) -> [u32; 3] {
         }
     }
     used
+}
+
+/// The end of the flash-mapped sections, as a flash offset.
+fn flash_end(file: &object::File) -> u32 {
+    let mut end = 0u32;
+    for section in file.sections() {
+        let (Ok(addr), Ok(size)) = (u32::try_from(section.address()), u32::try_from(section.size())) else { continue };
+        if FLASH.contains(&addr) {
+            end = end.max(addr.saturating_add(size).saturating_sub(FLASH_MAP_BASE));
+        }
+    }
+    end
+}
+
+/// The image must end before the settings record's sectors.
+fn check_flash_end(end: u32) -> Result<String, String> {
+    let first = settings::FIRST_SECTOR;
+    if end <= first {
+        Ok(format!(
+            "flash code ends at offset {end:#08x}, before the settings sectors {:#08x} and {:#08x} (config::settings)",
+            settings::SECTORS[0],
+            settings::SECTORS[1]
+        ))
+    } else {
+        Err(format!("flash code ends at offset {end:#08x}, over the settings sectors from {first:#08x}"))
+    }
 }
 
 /// The firmware's functions with their calls, from the disassembly.
@@ -462,6 +507,13 @@ mod tests {
         assert!(writes_first_operand("l32i.n"));
         assert!(writes_first_operand("mov.n"));
         assert!(writes_first_operand("addi"));
+    }
+
+    #[test]
+    fn the_image_must_end_before_the_settings_sectors() {
+        assert!(check_flash_end(0x2_0000).unwrap().contains("before the settings sectors 0x3f9000 and 0x3fa000"));
+        assert!(check_flash_end(0x3F_9000).is_ok());
+        assert!(check_flash_end(0x3F_9001).unwrap_err().contains("over the settings sectors from 0x3f9000"));
     }
 
     #[test]
