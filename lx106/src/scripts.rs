@@ -13,6 +13,7 @@
 
 use paperbot::config;
 use paperbot::control::log::RingLog;
+use paperbot::control::settings::{FlashSettings, MemoryFlash};
 use paperbot::control::{Controller, Hardware, LineSink};
 use paperbot::driver::{CompassSample, HeadingSensor, LidarSample, MagCalibrate, RangeSensor, SensorError, Servos};
 use paperbot::math::{Angle, Dt, Length, Speed, TurnRate};
@@ -221,11 +222,12 @@ pub struct ScriptCompass {
     pub next: Option<nb::Result<CompassSample, SensorError>>,
     pub reinit: Result<(), SensorError>,
     pub calibration: MagCalibration,
+    pub declination: Angle,
 }
 
 impl ScriptCompass {
     pub const fn new() -> Self {
-        ScriptCompass { next: None, reinit: Ok(()), calibration: MagCalibration::IDENTITY }
+        ScriptCompass { next: None, reinit: Ok(()), calibration: MagCalibration::IDENTITY, declination: Angle(0) }
     }
 }
 
@@ -248,6 +250,12 @@ impl MagCalibrate for ScriptCompass {
     }
     fn set_calibration(&mut self, calibration: MagCalibration) {
         self.calibration = calibration;
+    }
+    fn declination(&self) -> Angle {
+        self.declination
+    }
+    fn set_declination(&mut self, declination: Angle) {
+        self.declination = declination;
     }
 }
 
@@ -295,6 +303,7 @@ impl Hardware for Scripted {
     type Compass = ScriptCompass;
     type Servos = ScriptServos;
     type Log = RingLog<0>;
+    type Settings = FlashSettings<MemoryFlash>;
 }
 
 pub type ScriptController = Controller<Scripted>;

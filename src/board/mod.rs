@@ -6,7 +6,8 @@
 //!   open-drain GPIOs, fast mode, clock stretching, bus recovery;
 //! - [`servo_pulse`]: the FRC1 servo-pulse schedule (latency-independent
 //!   edges) and the CAS-free loop-to-interrupt handoff of pulse widths;
-//! - [`uart`]: the UART0 baud divider.
+//! - [`uart`]: the UART0 baud divider;
+//! - [`flash`]: the settings sectors as the robot reaches them.
 //!
 //! The board holds no simulator code: `tests/bitbang_i2c.rs` runs the
 //! master cycle by cycle on the simulator's wire (`sim::wire`, the one wire
@@ -19,6 +20,7 @@
 //! RTC memory across resets. The firmware binary is `src/bin/firmware.rs`.
 
 pub mod bitbang_i2c;
+pub mod flash;
 pub mod servo_pulse;
 pub mod uart;
 

@@ -85,15 +85,16 @@ pub enum Refusal {
 }
 
 impl Refusal {
-    /// The reason, for the boot line.
+    /// The reason, for the boot line (short: every byte of text is DRAM
+    /// on the robot).
     pub fn reason(self) -> &'static str {
         match self {
             Refusal::Blank => "erased",
-            Refusal::Unfinished => "a save cut short",
-            Refusal::NotARecord => "not a settings record",
-            Refusal::OtherVersion(_) => "a record of another version",
-            Refusal::Damaged => "damaged (CRC mismatch)",
-            Refusal::OutOfRange => "a value out of range",
+            Refusal::Unfinished => "save cut short",
+            Refusal::NotARecord => "not a record",
+            Refusal::OtherVersion(_) => "version",
+            Refusal::Damaged => "CRC mismatch",
+            Refusal::OutOfRange => "value out of range",
         }
     }
 }
@@ -190,6 +191,8 @@ pub enum FlashError {
     Error,
     /// SPI_FLASH_RESULT_TIMEOUT.
     Timeout,
+    /// The board has no flash access (yet): `board::flash`.
+    NoAccess,
 }
 
 /// The flash as the ESP8266 ROM's routines give it (SPIRead, SPIWrite,
@@ -238,6 +241,12 @@ pub trait SettingsStore {
 /// module docs).
 pub struct FlashSettings<F: Flash> {
     pub flash: F,
+}
+
+impl<F: Flash + Default> Default for FlashSettings<F> {
+    fn default() -> Self {
+        FlashSettings::new(F::default())
+    }
 }
 
 impl<F: Flash> FlashSettings<F> {

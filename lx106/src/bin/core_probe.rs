@@ -16,6 +16,8 @@ use core::hint::black_box as bb;
 use core::ptr::{read_volatile, write_volatile};
 
 use paperbot::control::log::RingLog;
+use paperbot::control::settings::{FlashSettings, MemoryFlash};
+use paperbot::math::Angle;
 use paperbot::control::{Controller, Hardware, LineSink};
 use paperbot::driver::{CompassSample, HeadingSensor, LidarSample, MagCalibrate, RangeSensor, SensorError, Servos};
 use paperbot::model::compass::MagCalibration;
@@ -42,7 +44,7 @@ impl RangeSensor for InLidar {
         bb(Ok(()))
     }
 }
-struct InCompass(MagCalibration);
+struct InCompass(MagCalibration, Angle);
 impl HeadingSensor for InCompass {
     fn poll(&mut self) -> nb::Result<CompassSample, SensorError> {
         bb(Err(nb::Error::WouldBlock))
@@ -60,6 +62,12 @@ impl MagCalibrate for InCompass {
     }
     fn set_calibration(&mut self, calibration: MagCalibration) {
         self.0 = bb(calibration);
+    }
+    fn declination(&self) -> Angle {
+        self.1
+    }
+    fn set_declination(&mut self, declination: Angle) {
+        self.1 = bb(declination);
     }
 }
 struct OutServos;
@@ -86,11 +94,12 @@ impl Hardware for Probe {
     type Compass = InCompass;
     type Servos = OutServos;
     type Log = RingLog<0>;
+    type Settings = FlashSettings<MemoryFlash>;
 }
 
 #[no_mangle]
 pub extern "C" fn rust_main() -> i32 {
-    let mut ctl = Controller::<Probe>::new(InLidar, InLidar, InCompass(MagCalibration::IDENTITY), OutServos, Pose::default());
+    let mut ctl = Controller::<Probe>::new(InLidar, InLidar, InCompass(MagCalibration::IDENTITY, Angle(0)), OutServos, Pose::default());
     let mut uart = Uart;
     ctl.feed(input() as u8, &mut uart);
     ctl.tick(input(), &mut uart);
