@@ -47,7 +47,7 @@ mod robot {
     use paperbot::board::esp8266::{
         halt, start_watchdog, take_over_interrupts, Board, Ccount, CcountDelay, Eh1Output, I2cBus, MicrosClock,
     };
-    use paperbot::board::flash::NoFlashAccess;
+    use paperbot::board::rom_flash::RomFlash;
     use paperbot::board::rtc_store::RtcMissionStore;
     use paperbot::board::servo_pulse::ServoPulses;
     use paperbot::config;
@@ -92,7 +92,7 @@ mod robot {
         type Compass = Compass<SharedI2c<'a, I2cBus>, CcountDelay>;
         type Servos = ServoPair<ServoPulses<'static>>;
         type Log = &'static mut RingLog<{ config::log::ROWS }>;
-        type Settings = FlashSettings<NoFlashAccess>;
+        type Settings = FlashSettings<RomFlash>;
     }
 
     #[entry]
@@ -131,7 +131,7 @@ mod robot {
         // SAFETY: `run` is entered once (main never returns): the only reference to LOG
         let log = unsafe { &mut *core::ptr::addr_of_mut!(LOG) };
         let start = Arena::DEFAULT.centre();
-        let settings = FlashSettings::new(NoFlashAccess);
+        let settings = FlashSettings::new(RomFlash);
         let mut ctl =
             Controller::<Robot>::with_log(front, right, compass, servos, start, Arena::DEFAULT, log, settings);
         // the settings in flash, then a mission uploaded before a reset (RTC

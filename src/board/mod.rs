@@ -6,8 +6,7 @@
 //!   open-drain GPIOs, fast mode, clock stretching, bus recovery;
 //! - [`servo_pulse`]: the FRC1 servo-pulse schedule (latency-independent
 //!   edges) and the CAS-free loop-to-interrupt handoff of pulse widths;
-//! - [`uart`]: the UART0 baud divider;
-//! - [`flash`]: the settings sectors as the robot reaches them.
+//! - [`uart`]: the UART0 baud divider.
 //!
 //! The board holds no simulator code: `tests/bitbang_i2c.rs` runs the
 //! master cycle by cycle on the simulator's wire (`sim::wire`, the one wire
@@ -17,15 +16,19 @@
 //! `target_arch = "xtensa"` with the `board` feature: esp8266-hal pins as
 //! [`bitbang_i2c::I2cPins`], the FRC1 interrupt, UART0, watchdog, LED and the
 //! panic handler; [`rtc_store`](self) (`rtc_store.rs`) keeps a mission in
-//! RTC memory across resets. The firmware binary is `src/bin/firmware.rs`.
+//! RTC memory across resets; [`rom_flash`](self) (`rom_flash.rs`) reaches
+//! the settings sectors through the ROM's flash routines. The firmware
+//! binary is `src/bin/firmware.rs`.
 
 pub mod bitbang_i2c;
-pub mod flash;
 pub mod servo_pulse;
 pub mod uart;
 
 #[cfg(all(target_arch = "xtensa", feature = "board"))]
 pub mod esp8266;
+/// The settings sectors through the ROM's flash routines (see the file).
+#[cfg(all(target_arch = "xtensa", feature = "board"))]
+pub mod rom_flash;
 /// The mission store in RTC memory (see the file).
 #[cfg(all(target_arch = "xtensa", feature = "board"))]
 pub mod rtc_store;

@@ -191,8 +191,6 @@ pub enum FlashError {
     Error,
     /// SPI_FLASH_RESULT_TIMEOUT.
     Timeout,
-    /// The board has no flash access (yet): `board::flash`.
-    NoAccess,
 }
 
 /// The flash as the ESP8266 ROM's routines give it (SPIRead, SPIWrite,

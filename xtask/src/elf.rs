@@ -9,6 +9,9 @@
 //! - everything reachable from the level-1 interrupt entry in IRAM or ROM:
 //!   flash is mapped through a cache the flash routines switch off, so
 //!   code an interrupt reaches must not be there;
+//! - everything reachable from the flash routines' caller (which turns the
+//!   flash cache off around the ROM's SPIRead/SPIWrite/SPIEraseSector) in
+//!   IRAM or ROM, for the same reason;
 //! - the memory budget;
 //! - the flash-mapped code ends before the settings sectors
 //!   (`src/config/settings.rs`, included here as it is).
@@ -60,6 +63,10 @@ const INTERRUPT_ENTRY: &str = "__level_1_interrupt";
 /// The vector code on the way there, which must be in IRAM too.
 const INTERRUPT_PATH: [&str; 4] =
     ["_UserExceptionVector", "__default_naked_exception", "save_context", "restore_context"];
+
+/// The function that calls the ROM's flash routines with the cache off
+/// (src/board/rom_flash.rs).
+const CACHE_OFF_ENTRY: &str = "paperbot::board::rom_flash::with_cache_off";
 
 /// The budgets (bytes): a quarter of IRAM, of the user's DRAM and of the
 /// 1 MiB flash window, leaving room to grow and for the stack.
@@ -125,6 +132,26 @@ pub fn check(path: &Path) -> Result<String, String> {
             } else {
                 failures
                     .push(format!("reachable from {INTERRUPT_ENTRY} but not in IRAM or ROM: {}", outside.join(", ")));
+            }
+        }
+        Err(e) => failures.push(e),
+    }
+
+    match functions.reach_from(CACHE_OFF_ENTRY) {
+        Ok(reached) => {
+            let outside: Vec<String> = reached
+                .iter()
+                .filter(|(addr, _)| !(IRAM.contains(addr) || ROM.contains(addr)))
+                .map(|(addr, name)| format!("{name} at {addr:#010x}"))
+                .collect();
+            if outside.is_empty() {
+                let names: Vec<&str> = reached.values().map(String::as_str).collect();
+                let _ = writeln!(report, "  cache-off code: {} in IRAM or ROM", names.join(", "));
+            } else {
+                failures.push(format!(
+                    "reachable from {CACHE_OFF_ENTRY} (the flash cache off) but not in IRAM or ROM: {}",
+                    outside.join(", ")
+                ));
             }
         }
         Err(e) => failures.push(e),

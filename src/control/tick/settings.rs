@@ -70,7 +70,6 @@ fn flash_error(e: FlashError) -> &'static str {
     match e {
         FlashError::Error => "flash error",
         FlashError::Timeout => "flash timeout",
-        FlashError::NoAccess => "no flash access yet",
     }
 }
 
