@@ -194,10 +194,11 @@ impl<H: Hardware> Controller<H> {
         }
         match self.settings.forget() {
             Ok(pause_us) => {
-                let mission = core::mem::take(&mut self.missions.mission);
-                let mut config = Settings::from_config();
-                config.mission = mission;
-                self.apply(config);
+                // the config's values, field by field (the mission stays)
+                self.model.left_trim = config::actuators::LEFT_TRIM;
+                self.model.right_trim = config::actuators::RIGHT_TRIM;
+                self.compass.driver.set_calibration(config::compass::CALIBRATION);
+                self.compass.driver.set_declination(config::compass::DECLINATION);
                 let mission = if self.missions.mission.is_empty() { Source::Config } else { Source::Changed };
                 self.sources = Sources { mission, ..Sources::CONFIG };
                 self.respond(&Response::Ok(&crate::control::protocol::Command::Forget), sink);
