@@ -247,3 +247,12 @@ fn the_fuzz_seed_holds_two_valid_records() {
     assert_eq!(decode(&first).unwrap().0.left_trim, Trim(256));
     assert_eq!(decode(&second).unwrap().1, 2);
 }
+
+#[test]
+fn a_board_without_flash_has_a_zero_sized_store_that_refuses() {
+    use paperbot::control::settings::NoFlash;
+    assert_eq!(std::mem::size_of::<FlashSettings<NoFlash>>(), 0);
+    let mut st = FlashSettings::new(NoFlash);
+    assert_eq!(st.load(), Err(FlashError::Error));
+    assert_eq!(st.save(&learned()), Err(FlashError::Error));
+}

@@ -13,7 +13,7 @@
 
 use paperbot::config;
 use paperbot::control::log::RingLog;
-use paperbot::control::settings::{FlashSettings, MemoryFlash};
+use paperbot::control::settings::{FlashSettings, NoFlash};
 use paperbot::control::{Controller, Hardware, LineSink};
 use paperbot::driver::{CompassSample, HeadingSensor, LidarSample, MagCalibrate, RangeSensor, SensorError, Servos};
 use paperbot::math::{Angle, Dt, Length, Speed, TurnRate};
@@ -303,8 +303,9 @@ impl Hardware for Scripted {
     type Compass = ScriptCompass;
     type Servos = ScriptServos;
     type Log = RingLog<0>;
-    type Settings = FlashSettings<MemoryFlash>;
+    type Settings = FlashSettings<NoFlash>;
 }
+
 
 pub type ScriptController = Controller<Scripted>;
 

@@ -309,6 +309,27 @@ impl<F: Flash> SettingsStore for FlashSettings<F> {
     }
 }
 
+/// A board without settings storage: zero-sized (as the firmware's
+/// `board::rom_flash::RomFlash`, so a controller over it has the robot's
+/// layout: the lx106 probes), every operation refused.
+#[derive(Clone, Copy, Default, Debug)]
+pub struct NoFlash;
+
+impl Flash for NoFlash {
+    fn read(&mut self, _addr: u32, _words: &mut [u32]) -> Result<(), FlashError> {
+        Err(FlashError::Error)
+    }
+    fn erase_sector(&mut self, _addr: u32) -> Result<(), FlashError> {
+        Err(FlashError::Error)
+    }
+    fn write(&mut self, _addr: u32, _words: &[u32]) -> Result<(), FlashError> {
+        Err(FlashError::Error)
+    }
+    fn now_us(&self) -> u32 {
+        0
+    }
+}
+
 /// Flash in memory with NOR semantics, modelling the two settings sectors
 /// up to a record's length (host tests and the simulator). `power_left`
 /// counts the word writes and erases the power lasts for (`None`: for

@@ -16,7 +16,7 @@ use core::hint::black_box as bb;
 use core::ptr::{read_volatile, write_volatile};
 
 use paperbot::control::log::RingLog;
-use paperbot::control::settings::{FlashSettings, MemoryFlash};
+use paperbot::control::settings::{FlashSettings, NoFlash};
 use paperbot::math::Angle;
 use paperbot::control::{Controller, Hardware, LineSink};
 use paperbot::driver::{CompassSample, HeadingSensor, LidarSample, MagCalibrate, RangeSensor, SensorError, Servos};
@@ -94,7 +94,7 @@ impl Hardware for Probe {
     type Compass = InCompass;
     type Servos = OutServos;
     type Log = RingLog<0>;
-    type Settings = FlashSettings<MemoryFlash>;
+    type Settings = FlashSettings<NoFlash>;
 }
 
 #[no_mangle]
