@@ -44,7 +44,7 @@ impl RangeSensor for InLidar {
         bb(Ok(()))
     }
 }
-struct InCompass(MagCalibration, Angle);
+struct InCompass(MagCalibration);
 impl HeadingSensor for InCompass {
     fn poll(&mut self) -> nb::Result<CompassSample, SensorError> {
         bb(Err(nb::Error::WouldBlock))
@@ -63,11 +63,12 @@ impl MagCalibrate for InCompass {
     fn set_calibration(&mut self, calibration: MagCalibration) {
         self.0 = bb(calibration);
     }
+    // no field, as in scripts.rs: the probe's store never restores one
     fn declination(&self) -> Angle {
-        self.1
+        bb(Angle(0))
     }
     fn set_declination(&mut self, declination: Angle) {
-        self.1 = bb(declination);
+        bb(declination);
     }
 }
 struct OutServos;
@@ -99,7 +100,7 @@ impl Hardware for Probe {
 
 #[no_mangle]
 pub extern "C" fn rust_main() -> i32 {
-    let mut ctl = Controller::<Probe>::new(InLidar, InLidar, InCompass(MagCalibration::IDENTITY, Angle(0)), OutServos, Pose::default());
+    let mut ctl = Controller::<Probe>::new(InLidar, InLidar, InCompass(MagCalibration::IDENTITY), OutServos, Pose::default());
     let mut uart = Uart;
     ctl.feed(input() as u8, &mut uart);
     ctl.tick(input(), &mut uart);
