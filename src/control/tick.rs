@@ -51,7 +51,9 @@
 //! Localization (`localizing.rs`): `locate`, `reset` and the power-up run
 //! a `control::survey`; while it runs, the readings go to its views instead
 //! of the estimator, it turns the body between views, and its fix starts
-//! the estimator. The calibration sweep is in `sweep.rs`.
+//! the estimator. The calibration sweep is in `sweep.rs`; the settings in
+//! flash (restored at boot, `save`, `settings`, `forget`) in `settings.rs`,
+//! over the [`Hardware`]'s `Settings` store (`control::settings`).
 //!
 //! The parts: the [`Hardware`] the loop drives; a `SensorSlot` per sensor
 //! (`sensor.rs`: driver, health, newest sample, waiting reading); the
