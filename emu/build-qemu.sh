@@ -162,7 +162,7 @@ build_qemu() {
 build_rom() { # out.elf
     xtensa-lx106-elf-gcc -Os -nostdlib -ffreestanding -fno-builtin -fno-tree-loop-distribute-patterns -Wall -Werror \
         -T "$emu_dir/rom/rom.ld" -Wl,--gc-sections -Wl,-Map="$1.map" \
-        -o "$1" "$emu_dir/rom/reset.S" "$emu_dir/rom/boot.c" "$emu_dir/rom/routines.c"
+        -o "$1" "$emu_dir/rom/reset.S" "$emu_dir/rom/boot.c" "$emu_dir/rom/routines.c" "$emu_dir/rom/flash.c"
     if xtensa-lx106-elf-nm -u "$1" | grep -q .; then
         say "rom.elf has undefined symbols:"; xtensa-lx106-elf-nm -u "$1" >&2; exit 1
     fi

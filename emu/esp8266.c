@@ -41,7 +41,9 @@
  *
  * Machine options (-M esp8266,...):
  *   rom=FILE          the ROM (ELF, built by emu/build-qemu.sh)
- *   flash=FILE        raw flash contents (boot image at offset 0)
+ *   flash=FILE        raw flash contents (boot image at offset 0); flash
+ *                     programs and erases are written back to it
+ *   flash-power-ops=N the power fails before the N+1th program or erase
  *   events=FILE       "<virtual ns> <event>" lines: GPIO edges, UART input
  *                     lines fed, resets
  *   uart-input=FILE   bytes fed to UART0 RX at the baud rate, a line at a
@@ -200,7 +202,8 @@ static void map_regfile(Esp8266State *s, RegFile *f, const char *name,
 /* The flash chip's contents, read through the cache window at 0x40200000
  * (the first MiB; the rest of the file is accepted and not mapped). The
  * window is there only while the cache is on in a mode the flash answers
- * (esp8266_clock.c); under it, flash_off_mr refuses the read. */
+ * (esp8266_clock.c); under it, flash_off_mr refuses the read. The whole
+ * chip, written through SPI0's commands: esp8266_flash.c. */
 static void load_flash(Esp8266State *s)
 {
     g_autofree gchar *data = NULL;
@@ -220,6 +223,7 @@ static void load_flash(Esp8266State *s)
     window = memory_region_get_ram_ptr(&s->flash_mr);
     memset(window, 0xff, FLASH_MAP_SIZE);   /* erased flash */
     if (!s->flash_path) {
+        flash_chip_load(s, NULL, 0);
         return;
     }
     if (!g_file_get_contents(s->flash_path, &data, &len, &err)) {
@@ -231,6 +235,7 @@ static void load_flash(Esp8266State *s)
         exit(1);
     }
     memcpy(window, data, MIN(len, (gsize)FLASH_MAP_SIZE));
+    flash_chip_load(s, (const uint8_t *)data, len);
 }
 
 static uint64_t identity(void *opaque, uint64_t addr)
@@ -351,7 +356,7 @@ static void map_peripherals(Esp8266State *s)
            PERIPH_BASE + RTC_CNTL_OFFSET, 0x100);
     map_regfile(s, &s->spi0, "esp8266.spi0", PERIPH_BASE + SPI0_OFFSET, 0x100,
                 false);
-    s->spi0.written = flash_update_map;
+    s->spi0.written = spi0_written;
     s->spi0.written_opaque = s;
     regfile_init(&s->rtc, "esp8266.rtc", PERIPH_BASE + RTC_OFFSET, 0x100, false);
 
@@ -476,6 +481,7 @@ static void esp8266_instance_init(Object *obj)
     ESP8266_MACHINE(obj)->uart_baud = 115200;
     ESP8266_MACHINE(obj)->profile_ns = 10007;
     ESP8266_MACHINE(obj)->link_valid_until = INT64_MAX;
+    ESP8266_MACHINE(obj)->flash_power_ops = UINT32_MAX;
 }
 
 static void add_string_option(ObjectClass *oc, const char *name,
@@ -523,6 +529,9 @@ static void esp8266_class_init(ObjectClass *oc, void *data)
                       set_flash_mode_name,
                       "the fastest read mode the flash chip answers: qio, "
                       "qout, dio (default), dout");
+    add_u32_option(oc, "flash-power-ops", offsetof(Esp8266State, flash_power_ops),
+        "the power fails before the flash program or erase after these "
+        "many (a power cut mid-save; default: never)");
     add_u32_option(oc, "uart-baud", offsetof(Esp8266State, uart_baud),
         "the baud rate the other end of UART0 listens at (default 115200)");
 }

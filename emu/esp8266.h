@@ -40,6 +40,8 @@ OBJECT_DECLARE_SIMPLE_TYPE(Esp8266State, ESP8266_MACHINE)
 #define FLASH_MAP_BASE    0x40200000u
 #define FLASH_MAP_SIZE    (1 * MiB)
 #define FLASH_MAX_SIZE    (16 * MiB)
+/* The module's flash chip (ESP-12: 4 MiB; the image header says 4MB). */
+#define FLASH_CHIP_SIZE   (4 * MiB)
 #define DPORT_BASE        0x3ff00000u
 #define DPORT_SIZE        0x100u
 #define PERIPH_BASE       0x60000000u
@@ -136,6 +138,12 @@ struct Esp8266State {
                  rtc_mr, frc1_mr, wdt_mr, rtc_cntl_mr;
     RegFile dport, periph, rtc, io_mux, rtc_cntl, spi0;
     bool flash_readable;        /* the cache on, in a mode the flash answers */
+    uint8_t *flash_data;        /* the chip's contents (esp8266_flash.c) */
+    size_t flash_file_len;      /* bytes of the flash file */
+    bool flash_wel;             /* the write-enable latch */
+    int64_t flash_busy_until_ns;    /* a program or erase in progress */
+    uint32_t flash_power_ops;   /* programs and erases the power lasts for
+                                   (UINT32_MAX: for ever) */
     bool flash_off_logged;
 
     /* UART0 */
@@ -214,6 +222,10 @@ extern const MemoryRegionOps rtc_cntl_ops, flash_off_ops;
 void clock_reset(Esp8266State *s);
 void flash_update_map(void *opaque);
 bool parse_flash_mode(const char *name, FlashMode *mode);
+
+/* esp8266_flash.c: the flash chip behind SPI0's commands */
+void flash_chip_load(Esp8266State *s, const uint8_t *data, size_t len);
+void spi0_written(void *opaque);
 
 /* esp8266_uart.c: UART0 */
 extern const MemoryRegionOps uart_ops;

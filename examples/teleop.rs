@@ -15,13 +15,14 @@
 //!   --no-keepalive   line mode: do not repeat untimed motions (the deadman cuts them)
 //!   --mission FILE   upload FILE's mission steps (one per line, as after 'mission add')
 //!   --start          start the robot's mission (after --mission), then unplug the cable
+//!   --save           keep the robot's trims, calibration and mission in flash (after --mission)
 //!   --log-hz HZ      with --start: the on-board log's rows per second (default: the robot's)
 //!   --dump FILE      download the on-board log as telemetry CSV (with --record also as a replay log)
 //!   --web [ADDR:PORT] serve a live map and drive pad to browsers instead of the terminal UI
 //!                    (default 127.0.0.1:8080; 0.0.0.0:8080 lets a phone in; Ctrl-C quits)
 //!   --arena LxW      with --web: the box drawn, mm (default config::arena)
 //! ```
-//! Keys: arrows / WASD drive, space stops, + / - speed level, q quits.
+//! Keys: arrows / WASD drive, space stops, + / - speed level, k saves the settings, q quits.
 // Host tool: a panic fails a command on the laptop, never the robot
 // (the robot's lints, Cargo.toml).
 #![allow(clippy::restriction)]
@@ -60,6 +61,7 @@ struct Args {
     keepalive: bool,
     mission: Option<String>,
     start: bool,
+    save: bool,
     log_hz: Option<u16>,
     dump: Option<String>,
     web: Option<String>,
@@ -87,6 +89,7 @@ fn parse_args() -> Result<Args, String> {
             "--no-keepalive" => a.keepalive = false,
             "--mission" => a.mission = Some(value("--mission")?),
             "--start" => a.start = true,
+            "--save" => a.save = true,
             "--log-hz" => a.log_hz = Some(value("--log-hz")?.parse().map_err(|_| "--log-hz wants 0..100")?),
             "--dump" => a.dump = Some(value("--dump")?),
             // the address is optional: the next word is one if it has a ':' (a port's path has none)
@@ -263,6 +266,7 @@ fn run_tui(
                     }
                     Some(Action::Locate) => link::send(port, keys::LOCATE_COMMAND)?,
                     Some(Action::Status) => link::send(port, "status")?,
+                    Some(Action::Save) => link::send(port, mission::SAVE_COMMAND)?,
                     Some(Action::ToggleHelp) => help = !help,
                     Some(Action::Quit) => return Ok(()),
                     None => {}
@@ -339,7 +343,7 @@ fn run() -> Result<(), String> {
             Some(parse_plan(&text).map_err(|e| format!("{path}: {e}"))?)
         }
     };
-    let missions = args.mission.is_some() || args.start || args.dump.is_some();
+    let missions = args.mission.is_some() || args.start || args.dump.is_some() || args.save;
     let steps = match &args.mission {
         None => None,
         Some(path) => {
@@ -350,7 +354,7 @@ fn run() -> Result<(), String> {
     // bound before the port is opened: a port in use fails at once
     let web = args.web.as_deref().map(WebServer::bind).transpose()?;
     if web.is_some() && (plan.is_some() || missions) {
-        return Err("--web drives from the page: not with --lines, --mission, --start or --dump".into());
+        return Err("--web drives from the page: not with --lines, --mission, --start, --save or --dump".into());
     }
     if web.is_none() && plan.is_none() && !missions && !(io::stdout().is_terminal() && io::stdin().is_terminal()) {
         return Err("not a terminal: use --lines FILE (or '-' for stdin) for the line mode".into());
@@ -451,8 +455,9 @@ fn run_web(
     Ok(())
 }
 
-/// `--mission`, `--start`, `--dump`: upload, start, download, in that
-/// order (each optional), printing what the robot answers.
+/// `--mission`, `--save`, `--start`, `--dump`: upload, save, start,
+/// download, in that order (each optional), printing what the robot
+/// answers.
 fn run_missions(
     args: &Args,
     steps: Option<Vec<String>>,
@@ -465,9 +470,13 @@ fn run_missions(
     if let Some(steps) = steps {
         mission::upload(port, &steps, &mut out).map_err(io_err)??;
         eprintln!(
-            "teleop: mission of {} steps uploaded (kept on the robot across a reset, not a power-off)",
+            "teleop: mission of {} steps uploaded (kept on the robot across a reset; --save keeps it after a power-off)",
             steps.len()
         );
+    }
+    if args.save {
+        let saved = mission::save(port, &mut out).map_err(io_err)??;
+        eprintln!("teleop: {}: kept after a power-off", saved.trim_start_matches("# "));
     }
     if args.start {
         mission::start(port, args.log_hz, &mut out).map_err(io_err)??;

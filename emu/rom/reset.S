@@ -114,3 +114,6 @@ name_other:     .asciz "NMI or other"
     rom_entry __udivdi3, rom_udivdi3
     rom_entry __umoddi3, rom_umoddi3
     rom_entry __divdi3,  rom_divdi3
+    rom_entry SPIEraseSector, rom_spi_erase_sector
+    rom_entry SPIWrite,  rom_spi_write
+    rom_entry SPIRead,   rom_spi_read

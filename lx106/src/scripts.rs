@@ -13,6 +13,7 @@
 
 use paperbot::config;
 use paperbot::control::log::RingLog;
+use paperbot::control::settings::{FlashSettings, NoFlash};
 use paperbot::control::{Controller, Hardware, LineSink};
 use paperbot::driver::{CompassSample, HeadingSensor, LidarSample, MagCalibrate, RangeSensor, SensorError, Servos};
 use paperbot::math::{Angle, Dt, Length, Speed, TurnRate};
@@ -270,6 +271,14 @@ impl MagCalibrate for ScriptCompass {
     fn set_calibration(&mut self, calibration: MagCalibration) {
         self.calibration = calibration;
     }
+    // No declination field: the scripts' store (NoFlash) never restores
+    // one, and a field here shifts the controller's layout off the
+    // firmware's (its driver keeps the declination in its compass model):
+    // 45 more instructions on `bar::tick_without_io`.
+    fn declination(&self) -> Angle {
+        Angle(0)
+    }
+    fn set_declination(&mut self, _declination: Angle) {}
 }
 
 /// Servos that keep the last command.
@@ -316,7 +325,9 @@ impl Hardware for Scripted {
     type Compass = ScriptCompass;
     type Servos = ScriptServos;
     type Log = RingLog<0>;
+    type Settings = FlashSettings<NoFlash>;
 }
+
 
 pub type ScriptController = Controller<Scripted>;
 

@@ -34,11 +34,13 @@ mod robot {
     use paperbot::board::esp8266::{
         halt, start_watchdog, take_over_interrupts, Board, Ccount, CcountDelay, Eh1Output, I2cBus, MicrosClock,
     };
+    use paperbot::board::rom_flash::RomFlash;
     use paperbot::board::rtc_store::RtcMissionStore;
     use paperbot::board::servo_pulse::ServoPulses;
     use paperbot::config;
     use paperbot::control::log::RingLog;
     use paperbot::control::mission::{Mission, MissionStore as _};
+    use paperbot::control::settings::FlashSettings;
     use paperbot::control::tick::{Controller, Hardware, LineSink, TICK_US};
     use paperbot::driver::bus::SharedI2c;
     use paperbot::driver::compass::Compass;
@@ -77,6 +79,7 @@ mod robot {
         type Compass = Compass<SharedI2c<'a, I2cBus>, CcountDelay>;
         type Servos = ServoPair<ServoPulses<'static>>;
         type Log = &'static mut RingLog<{ config::log::ROWS }>;
+        type Settings = FlashSettings<RomFlash>;
     }
 
     #[entry]
@@ -115,10 +118,14 @@ mod robot {
         // SAFETY: `run` is entered once (main never returns): the only reference to LOG
         let log = unsafe { &mut *core::ptr::addr_of_mut!(LOG) };
         let start = Arena::DEFAULT.centre();
-        let mut ctl = Controller::<Robot>::with_log(front, right, compass, servos, start, Arena::DEFAULT, log);
-        // a mission uploaded before a reset (RTC memory; not after power-off)
+        let settings = FlashSettings::new(RomFlash);
+        let mut ctl =
+            Controller::<Robot>::with_log(front, right, compass, servos, start, Arena::DEFAULT, log, settings);
+        // the settings in flash, then a mission uploaded before a reset (RTC
+        // memory, newer than the flash's; not after power-off)
+        ctl.restore_settings(&mut UartLines(&mut serial));
         let mut store = RtcMissionStore;
-        if let Some(mission) = Mission::decode(&store.load()) {
+        if let Some(mission) = Mission::decode(&store.load()).filter(|m| m != ctl.mission()) {
             let _ = write!(serial, "mission of {} steps kept from before the reset\r\n", mission.len());
             ctl.set_mission(mission);
         }

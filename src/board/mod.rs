@@ -16,7 +16,9 @@
 //! `target_arch = "xtensa"` with the `board` feature: esp8266-hal pins as
 //! [`bitbang_i2c::I2cPins`], the FRC1 interrupt, UART0, watchdog, LED and the
 //! panic handler; [`rtc_store`](self) (`rtc_store.rs`) keeps a mission in
-//! RTC memory across resets. The firmware binary is `src/bin/firmware.rs`.
+//! RTC memory across resets; [`rom_flash`](self) (`rom_flash.rs`) reaches
+//! the settings sectors through the ROM's flash routines. The firmware
+//! binary is `src/bin/firmware.rs`.
 
 pub mod bitbang_i2c;
 pub mod servo_pulse;
@@ -24,6 +26,9 @@ pub mod uart;
 
 #[cfg(all(target_arch = "xtensa", feature = "board"))]
 pub mod esp8266;
+/// The settings sectors through the ROM's flash routines (see the file).
+#[cfg(all(target_arch = "xtensa", feature = "board"))]
+pub mod rom_flash;
 /// The mission store in RTC memory (see the file).
 #[cfg(all(target_arch = "xtensa", feature = "board"))]
 pub mod rtc_store;

@@ -33,6 +33,7 @@ pub mod locate;
 pub mod log;
 pub mod mission;
 pub mod serial;
+pub mod settings;
 pub mod timing;
 
 // the estimator

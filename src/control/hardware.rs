@@ -1,6 +1,7 @@
 //! The robot's hardware as the control loop sees it: one type per part.
 
 use crate::control::log::RowLog;
+use crate::control::settings::SettingsStore;
 use crate::driver::{HeadingSensor, MagCalibrate, RangeSensor, Servos};
 
 /// The types of the parts a [`crate::control::Controller`] drives: the
@@ -19,4 +20,7 @@ pub trait Hardware {
     /// The on-board log a mission writes (`RingLog<0>` keeps none: every
     /// row is dropped and counted).
     type Log: RowLog;
+    /// Where the settings survive power-off (`save`, `forget`): the
+    /// flash's two settings sectors.
+    type Settings: SettingsStore;
 }

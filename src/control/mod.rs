@@ -6,6 +6,7 @@ pub mod hardware;
 pub mod log;
 pub mod mission;
 pub mod protocol;
+pub mod settings;
 pub mod survey;
 pub mod tick;
 

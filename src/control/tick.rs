@@ -51,7 +51,9 @@
 //! Localization (`localizing.rs`): `locate`, `reset` and the power-up run
 //! a `control::survey`; while it runs, the readings go to its views instead
 //! of the estimator, it turns the body between views, and its fix starts
-//! the estimator. The calibration sweep is in `sweep.rs`.
+//! the estimator. The calibration sweep is in `sweep.rs`; the settings in
+//! flash (restored at boot, `save`, `settings`, `forget`) in `settings.rs`,
+//! over the [`Hardware`]'s `Settings` store (`control::settings`).
 //!
 //! The parts: the [`Hardware`] the loop drives; a `SensorSlot` per sensor
 //! (`sensor.rs`: driver, health, newest sample, waiting reading); the
@@ -73,6 +75,7 @@ mod navigate;
 mod readout;
 mod report;
 mod sensor;
+mod settings;
 mod sweep;
 
 use crate::config;
@@ -92,6 +95,7 @@ pub use mission_run::{MissionPhase, MissionRun};
 pub use mode::{Mode, Sweep};
 use report::Reports;
 pub use sensor::SensorHealth;
+pub use settings::{Source, Sources};
 
 pub use crate::control::hardware::Hardware;
 use crate::control::survey::Failure;
@@ -138,24 +142,32 @@ pub struct Controller<H: Hardware> {
     /// The localization (the state of [`Mode::Locate`]).
     localizing: Localizing,
     log: H::Log,
+    /// The settings in flash, and where each value in use comes from.
+    settings: H::Settings,
+    sources: Sources,
 }
 
 impl<H: Hardware> Controller<H>
 where
     H::Log: Default,
+    H::Settings: Default,
 {
     /// A loop over sensors the caller has brought up (a sensor that fails
     /// later is re-initialised by the loop), starting at `pose` in the
-    /// config's arena, stopped, with a new log.
+    /// config's arena, stopped, with a new log and settings store (the
+    /// config's values in use: [`Controller::restore_settings`] reads it).
     pub fn new(front: H::Front, right: H::Right, compass: H::Compass, servos: H::Servos, pose: Pose) -> Self {
-        Controller::with_log(front, right, compass, servos, pose, Arena::DEFAULT, H::Log::default())
+        let log = H::Log::default();
+        Controller::with_log(front, right, compass, servos, pose, Arena::DEFAULT, log, H::Settings::default())
     }
 }
 
 impl<H: Hardware> Controller<H> {
     /// A loop in `arena` (the simulator's may differ from the config's)
     /// with an on-board log (the firmware's is a static, in the DRAM
-    /// budget).
+    /// budget) and a settings store (the config's values are in use until
+    /// [`Controller::restore_settings`]).
+    #[allow(clippy::too_many_arguments)] // one per part the loop owns
     pub fn with_log(
         front: H::Front,
         right: H::Right,
@@ -164,6 +176,7 @@ impl<H: Hardware> Controller<H> {
         pose: Pose,
         arena: Arena,
         log: H::Log,
+        settings: H::Settings,
     ) -> Self {
         let model = config::actuators::MODEL;
         Controller {
@@ -188,6 +201,8 @@ impl<H: Hardware> Controller<H> {
             missions: Missions::new(),
             localizing: Localizing::new(),
             log,
+            settings,
+            sources: Sources::CONFIG,
         }
     }
 

@@ -269,4 +269,10 @@ impl<I2C: I2c, D: DelayNs> MagCalibrate for Compass<I2C, D> {
     fn set_calibration(&mut self, calibration: MagCalibration) {
         self.model.calibration = calibration;
     }
+    fn declination(&self) -> crate::math::Angle {
+        self.model.declination
+    }
+    fn set_declination(&mut self, declination: crate::math::Angle) {
+        self.model.declination = declination;
+    }
 }

@@ -73,6 +73,10 @@ pub trait MagCalibrate {
     fn calibration(&self) -> crate::model::compass::MagCalibration;
     /// Replaces the calibration (e.g. with a fresh sweep's result).
     fn set_calibration(&mut self, calibration: crate::model::compass::MagCalibration);
+    /// The declination added to the magnetic heading.
+    fn declination(&self) -> crate::math::Angle;
+    /// Replaces the declination (e.g. from the settings in flash).
+    fn set_declination(&mut self, declination: crate::math::Angle);
 }
 
 pub mod bus;

@@ -35,6 +35,7 @@ use super::script::Script;
 use super::sensors::{SimCompass, SimLidar, SimSensors};
 use crate::config;
 use crate::control::log::RingLog;
+use crate::control::settings::{FlashSettings, MemoryFlash};
 use crate::control::{Controller, Hardware, LineSink, TICK_US};
 use crate::driver::{HeadingSensor, Servos};
 use crate::math::Length;
@@ -72,6 +73,8 @@ impl Hardware for SimHardware {
     type Compass = SimCompass;
     type Servos = SimServos;
     type Log = RingLog<{ config::log::ROWS }>;
+    /// The settings sectors in memory (kept by the [`SimRobot`]).
+    type Settings = FlashSettings<MemoryFlash>;
 }
 
 /// The control loop on the simulated drivers, with the robot's on-board log.
@@ -188,7 +191,25 @@ pub struct SimRobot {
 }
 
 impl SimRobot {
+    /// A robot powered up with erased settings sectors (the config's
+    /// values, no boot line about them).
     pub fn new(cfg: SimConfig) -> SimRobot {
+        SimRobot::start(cfg, None)
+    }
+
+    /// A robot powered up with `flash` in its settings sectors (e.g. the
+    /// [`SimRobot::flash`] of a robot before a power-cycle): it restores
+    /// them as the firmware does, with the boot lines.
+    pub fn with_flash(cfg: SimConfig, flash: MemoryFlash) -> SimRobot {
+        SimRobot::start(cfg, Some(flash))
+    }
+
+    /// The settings sectors as they are now (to power-cycle into).
+    pub fn flash(&mut self) -> MemoryFlash {
+        self.ctl.settings_store().flash.clone()
+    }
+
+    fn start(cfg: SimConfig, flash: Option<MemoryFlash>) -> SimRobot {
         let sensors = SimSensors::new();
         let (mut front, mut right, mut compass) = sensors.drivers();
         let mut rng = Rng::new(cfg.seed);
@@ -203,9 +224,13 @@ impl SimRobot {
         // the firmware knows the arena it is in (its estimator uses the walls)
         let arena = cfg.arena;
         let believed = if cfg.locate_at_power_up { arena.centre() } else { cfg.start.to_pose() };
-        let mut ctl =
-            Controller::with_log(front, right, compass, SimServos::default(), believed, arena, RingLog::new());
+        let store = FlashSettings::new(flash.clone().unwrap_or_default());
+        let servos = SimServos::default();
+        let mut ctl = Controller::with_log(front, right, compass, servos, believed, arena, RingLog::new(), store);
         let mut out = Collect::default();
+        if flash.is_some() {
+            ctl.restore_settings(&mut out);
+        }
         if cfg.locate_at_power_up {
             ctl.power_up(&mut out);
         }

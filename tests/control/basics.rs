@@ -7,6 +7,7 @@ use std::collections::VecDeque;
 use paperbot::config;
 use paperbot::control::log::RingLog;
 use paperbot::control::protocol::{parse_telemetry_row, telemetry_header, FaultCounters, HELP};
+use paperbot::control::settings::{FlashSettings, MemoryFlash};
 use paperbot::control::{Controller, Hardware, LineSink, Mode, TICK_US};
 use paperbot::driver::{CompassSample, HeadingSensor, LidarSample, MagCalibrate, RangeSensor, SensorError, Servos};
 use paperbot::math::{Angle, Speed};
@@ -66,6 +67,7 @@ struct FakeCompass {
     radius: f64,
     centre: [f64; 3],
     calibration: MagCalibration,
+    declination: Angle,
     reinit_calls: u32,
 }
 
@@ -78,6 +80,7 @@ impl Default for FakeCompass {
             radius: 0.0,
             centre: [0.0; 3],
             calibration: config::compass::CALIBRATION,
+            declination: config::compass::DECLINATION,
             reinit_calls: 0,
         }
     }
@@ -115,6 +118,12 @@ impl MagCalibrate for FakeCompass {
     fn set_calibration(&mut self, calibration: MagCalibration) {
         self.calibration = calibration;
     }
+    fn declination(&self) -> Angle {
+        self.declination
+    }
+    fn set_declination(&mut self, declination: Angle) {
+        self.declination = declination;
+    }
 }
 
 #[derive(Default)]
@@ -139,6 +148,7 @@ impl Hardware for Fakes {
     type Compass = FakeCompass;
     type Servos = FakeServos;
     type Log = RingLog<0>;
+    type Settings = FlashSettings<MemoryFlash>;
 }
 
 type Ctl = Controller<Fakes>;
@@ -300,7 +310,15 @@ fn trim_moves_the_neutral_of_one_servo() {
     let (mut ctl, mut out) = setup();
     send(&mut ctl, &mut out, "trim left 1.5");
     send(&mut ctl, &mut out, "trim r -2.25");
-    assert_eq!(out.take(), ["# ok trim left 1.50", "# ok trim right -2.25"]);
+    assert_eq!(
+        out.take(),
+        [
+            "# ok trim left 1.50",
+            "# not saved: save to keep it",
+            "# ok trim right -2.25",
+            "# not saved: save to keep it"
+        ]
+    );
     ctl.tick(0, &mut out);
     assert_eq!(servos(&mut ctl), (ServoCmd::from_f64(91.5), ServoCmd::from_f64(87.75)));
     assert_eq!(ctl.model().left_trim, Trim::from_f64(1.5));
@@ -651,7 +669,8 @@ fn calibration_turns_in_place_applies_and_prints_the_result() {
     ctl.tick(2_990_000, &mut out);
     assert_eq!(ctl.mode(), Mode::Idle);
     let lines = out.take();
-    assert_eq!(lines.len(), 2, "{lines:?}");
+    assert_eq!(lines.len(), 3, "{lines:?}");
+    assert_eq!(lines[2], "# not saved: save to keep it");
     assert_eq!(
         lines[0],
         "# calibration ok: 300 samples, 12 of 12 sectors; x and y measured, z kept from config; applied. For config::compass:"

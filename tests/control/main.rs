@@ -7,5 +7,7 @@ mod common;
 
 mod basics;
 mod faults_long;
+mod settings;
+mod settings_loop;
 mod soak;
 mod untethered;

@@ -57,7 +57,8 @@ fn keys_map_to_actions() {
         (Key::Char('Q'), Some(Quit)),
         (Key::Esc, Some(Quit)),
         (Key::CtrlC, Some(Quit)),
-        (Key::Char('k'), None),
+        (Key::Char('k'), Some(Save)),
+        (Key::Char('K'), Some(Save)),
         (Key::Char('1'), None),
         (Key::Char('\n'), None),
     ];
@@ -70,6 +71,12 @@ fn keys_map_to_actions() {
 fn r_asks_the_robot_to_find_its_pose() {
     let cmd = paperbot::host::teleop::keys::LOCATE_COMMAND;
     assert_eq!(parse(cmd.as_bytes()), Ok(Command::Locate));
+}
+
+#[test]
+fn k_asks_the_robot_to_save_its_settings() {
+    let cmd = paperbot::host::teleop::mission::SAVE_COMMAND;
+    assert_eq!(parse(cmd.as_bytes()), Ok(Command::Save));
 }
 
 // ---- speed levels ----------------------------------------------------------

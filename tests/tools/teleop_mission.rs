@@ -9,7 +9,7 @@ use std::io::{self, Read, Write};
 use paperbot::config;
 use paperbot::control::log::RowLog;
 use paperbot::control::protocol::{parse_telemetry_row, telemetry_header};
-use paperbot::host::teleop::mission::{download, parse_mission_file, start, upload};
+use paperbot::host::teleop::mission::{download, parse_mission_file, save, start, upload};
 use paperbot::host::teleop::Recorder;
 use paperbot::model::estimator::replay;
 use paperbot::sim::body::PoseF64;
@@ -106,6 +106,31 @@ fn a_mission_file_is_uploaded_started_run_unplugged_and_its_log_downloaded() {
     assert_eq!(samples.len(), held);
     assert!(samples.iter().any(|s| s.front_mm.is_some()) && samples.iter().any(|s| s.heading.is_some()));
     println!("mission log: {held} rows, downloaded and replayable");
+}
+
+#[test]
+fn a_mission_uploaded_and_saved_is_back_after_a_power_cycle() {
+    // teleop --mission FILE --save
+    let steps = parse_mission_file(FILE).unwrap();
+    let cfg = SimConfig { locate_at_power_up: false, ..SimConfig::default() };
+    let mut port = SimPort { robot: SimRobot::new(cfg), pending: VecDeque::new() };
+    let mut shown = Vec::new();
+    upload(&mut port, &steps, &mut shown).unwrap().unwrap();
+    let saved = save(&mut port, &mut shown).unwrap().unwrap();
+    assert!(saved.starts_with("# saved: record 1 at 0x3f9000, paused "), "{saved}");
+    let flash = port.robot.flash();
+    let mut again = SimRobot::with_flash(cfg, flash);
+    assert_eq!(
+        again.take_output(),
+        ["# settings from flash, record 1: trims, compass, declination, mission of 7 steps"]
+    );
+    assert_eq!(again.controller().mission(), port.robot.controller().mission());
+
+    // refused while the robot moves: the reason comes back
+    let mut port = SimPort { robot: again, pending: VecDeque::new() };
+    port.robot.send("fwd 0.13");
+    let refused = save(&mut port, &mut shown).unwrap().unwrap_err();
+    assert!(refused.ends_with("# err moving: stop first (flash pauses the loop)"), "{refused}");
 }
 
 #[test]

@@ -9,7 +9,12 @@
 //! - everything reachable from the level-1 interrupt entry in IRAM or ROM:
 //!   flash is mapped through a cache the flash routines switch off, so
 //!   code an interrupt reaches must not be there;
-//! - the memory budget.
+//! - everything reachable from the flash routines' caller (which turns the
+//!   flash cache off around the ROM's SPIRead/SPIWrite/SPIEraseSector) in
+//!   IRAM or ROM, for the same reason;
+//! - the memory budget;
+//! - the flash-mapped code ends before the settings sectors
+//!   (`src/config/settings.rs`, included here as it is).
 use std::collections::{BTreeMap, BTreeSet};
 use std::fmt::Write as _;
 use std::ops::Range;
@@ -27,6 +32,16 @@ const IRAM: Range<u32> = 0x4010_0000..0x4010_8000;
 const DRAM: Range<u32> = 0x3FFE_8000..0x4000_0000;
 const ROM: Range<u32> = 0x4000_0000..0x4001_0000;
 const FLASH: Range<u32> = 0x4020_0000..0x4030_0000;
+
+/// The firmware's flash map (`config::settings`): the one file, compiled
+/// here too, so the check and the firmware agree.
+#[allow(dead_code)]
+#[path = "../../src/config/settings.rs"]
+mod settings;
+
+/// Flash offset 0 is mapped at the start of [`FLASH`] (memory.x: flash code
+/// at 0x40210000 is written at offset 0x10000).
+const FLASH_MAP_BASE: u32 = FLASH.start;
 
 /// Where the lx106 takes its exceptions, from VECBASE = 0x40100000 (the
 /// core's configuration, core-isa.h: XCHAL_*_VECOFS; exception.x).
@@ -48,6 +63,10 @@ const INTERRUPT_ENTRY: &str = "__level_1_interrupt";
 /// The vector code on the way there, which must be in IRAM too.
 const INTERRUPT_PATH: [&str; 4] =
     ["_UserExceptionVector", "__default_naked_exception", "save_context", "restore_context"];
+
+/// The function that calls the ROM's flash routines with the cache off
+/// (src/board/rom_flash.rs).
+const CACHE_OFF_ENTRY: &str = "paperbot::board::rom_flash::with_cache_off";
 
 /// The budgets (bytes): a quarter of IRAM, of the user's DRAM and of the
 /// 1 MiB flash window, leaving room to grow and for the stack.
@@ -118,6 +137,26 @@ pub fn check(path: &Path) -> Result<String, String> {
         Err(e) => failures.push(e),
     }
 
+    match functions.reach_from(CACHE_OFF_ENTRY) {
+        Ok(reached) => {
+            let outside: Vec<String> = reached
+                .iter()
+                .filter(|(addr, _)| !(IRAM.contains(addr) || ROM.contains(addr)))
+                .map(|(addr, name)| format!("{name} at {addr:#010x}"))
+                .collect();
+            if outside.is_empty() {
+                let names: Vec<&str> = reached.values().map(String::as_str).collect();
+                let _ = writeln!(report, "  cache-off code: {} in IRAM or ROM", names.join(", "));
+            } else {
+                failures.push(format!(
+                    "reachable from {CACHE_OFF_ENTRY} (the flash cache off) but not in IRAM or ROM: {}",
+                    outside.join(", ")
+                ));
+            }
+        }
+        Err(e) => failures.push(e),
+    }
+
     let used = usage(&file);
     let _ = writeln!(report, "  memory            used      budget     chip");
     for ((what, budget, chip), used) in BUDGETS.iter().zip(used) {
@@ -126,6 +165,13 @@ pub fn check(path: &Path) -> Result<String, String> {
         if used > *budget {
             failures.push(format!("{what}: {used} B over the budget of {budget} B"));
         }
+    }
+
+    match check_flash_end(flash_end(&file)) {
+        Ok(line) => {
+            let _ = writeln!(report, "  {line}");
+        }
+        Err(e) => failures.push(e),
     }
 
     if failures.is_empty() {
@@ -184,6 +230,32 @@ fn usage(file: &object::File) -> [u32; 3] {
         }
     }
     used
+}
+
+/// The end of the flash-mapped sections, as a flash offset.
+fn flash_end(file: &object::File) -> u32 {
+    let mut end = 0u32;
+    for section in file.sections() {
+        let (Ok(addr), Ok(size)) = (u32::try_from(section.address()), u32::try_from(section.size())) else { continue };
+        if FLASH.contains(&addr) {
+            end = end.max(addr.saturating_add(size).saturating_sub(FLASH_MAP_BASE));
+        }
+    }
+    end
+}
+
+/// The image must end before the settings record's sectors.
+fn check_flash_end(end: u32) -> Result<String, String> {
+    let first = settings::FIRST_SECTOR;
+    if end <= first {
+        Ok(format!(
+            "flash code ends at offset {end:#08x}, before the settings sectors {:#08x} and {:#08x} (config::settings)",
+            settings::SECTORS[0],
+            settings::SECTORS[1]
+        ))
+    } else {
+        Err(format!("flash code ends at offset {end:#08x}, over the settings sectors from {first:#08x}"))
+    }
 }
 
 /// The firmware's functions with their calls, from the disassembly.
@@ -462,6 +534,13 @@ mod tests {
         assert!(writes_first_operand("l32i.n"));
         assert!(writes_first_operand("mov.n"));
         assert!(writes_first_operand("addi"));
+    }
+
+    #[test]
+    fn the_image_must_end_before_the_settings_sectors() {
+        assert!(check_flash_end(0x2_0000).unwrap().contains("before the settings sectors 0x3f9000 and 0x3fa000"));
+        assert!(check_flash_end(0x3F_9000).is_ok());
+        assert!(check_flash_end(0x3F_9001).unwrap_err().contains("over the settings sectors from 0x3f9000"));
     }
 
     #[test]

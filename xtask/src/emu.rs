@@ -10,6 +10,7 @@
 mod cost;
 mod events;
 mod flash;
+mod flashtest;
 mod qemu;
 mod selftest;
 mod sim;

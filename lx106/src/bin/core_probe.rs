@@ -16,6 +16,8 @@ use core::hint::black_box as bb;
 use core::ptr::{read_volatile, write_volatile};
 
 use paperbot::control::log::RingLog;
+use paperbot::control::settings::{FlashSettings, NoFlash};
+use paperbot::math::Angle;
 use paperbot::control::{Controller, Hardware, LineSink};
 use paperbot::driver::{CompassSample, HeadingSensor, LidarSample, MagCalibrate, RangeSensor, SensorError, Servos};
 use paperbot::model::compass::MagCalibration;
@@ -61,6 +63,13 @@ impl MagCalibrate for InCompass {
     fn set_calibration(&mut self, calibration: MagCalibration) {
         self.0 = bb(calibration);
     }
+    // no field, as in scripts.rs: the probe's store never restores one
+    fn declination(&self) -> Angle {
+        bb(Angle(0))
+    }
+    fn set_declination(&mut self, declination: Angle) {
+        bb(declination);
+    }
 }
 struct OutServos;
 impl Servos for OutServos {
@@ -86,6 +95,7 @@ impl Hardware for Probe {
     type Compass = InCompass;
     type Servos = OutServos;
     type Log = RingLog<0>;
+    type Settings = FlashSettings<NoFlash>;
 }
 
 #[no_mangle]

@@ -25,6 +25,7 @@ use core::ptr::{read_volatile, write_volatile};
 use paperbot::board::bitbang_i2c::{BitBangI2c, CycleClock, I2cPins, Timing};
 use paperbot::board::servo_pulse::{Channel, PulseMailbox, PulseScheduler, PulseTimer, ServoPulses};
 use paperbot::control::log::RingLog;
+use paperbot::control::settings::{FlashSettings, NoFlash};
 use paperbot::control::{Controller, Hardware, LineSink};
 use paperbot::driver::bus::SharedI2c;
 use paperbot::driver::compass::Compass;
@@ -136,6 +137,7 @@ impl<'a> Hardware for Stack<'a> {
     type Compass = Compass<SharedI2c<'a, BitBangI2c<Pins, Clock>>, Delay>;
     type Servos = ServoPair<ServoPulses<'a>>;
     type Log = RingLog<0>;
+    type Settings = FlashSettings<NoFlash>;
 }
 
 #[no_mangle]

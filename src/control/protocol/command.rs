@@ -81,6 +81,13 @@ pub enum Command {
     /// Finds where the robot is, turning in place (`locate`, or `reset`;
     /// see `control::survey`).
     Locate,
+    /// Writes the trims, the compass calibration and declination and the
+    /// mission to flash (`save`; refused while the robot moves).
+    Save,
+    /// Lists each setting and where its value comes from (`settings`).
+    Settings,
+    /// Erases the settings in flash, back to the config (`forget`).
+    Forget,
 }
 
 /// What a `mission` command does.
@@ -130,6 +137,9 @@ const KEYWORDS: &[(&str, Keyword)] = &[
     ("wait", Keyword::Wait),
     ("log", Keyword::Log),
     ("dump", Keyword::Dump),
+    ("save", Keyword::Save),
+    ("settings", Keyword::Settings),
+    ("forget", Keyword::Forget),
 ];
 
 #[derive(Clone, Copy)]
@@ -152,6 +162,9 @@ enum Keyword {
     Wait,
     Log,
     Dump,
+    Save,
+    Settings,
+    Forget,
 }
 
 impl Keyword {
@@ -171,7 +184,14 @@ impl Keyword {
             Keyword::Goto => (&[Field::X, Field::Y], None),
             Keyword::Face => (&[Field::Heading], None),
             Keyword::Wait => (&[], DURATION),
-            Keyword::Stop | Keyword::Locate | Keyword::Status | Keyword::Help | Keyword::Dump => (&[], None),
+            Keyword::Stop
+            | Keyword::Locate
+            | Keyword::Status
+            | Keyword::Help
+            | Keyword::Dump
+            | Keyword::Save
+            | Keyword::Settings
+            | Keyword::Forget => (&[], None),
         }
     }
 }
@@ -252,6 +272,9 @@ pub fn parse(line: &[u8]) -> Result<Command, ParseError> {
         }
         Keyword::Log => Command::Log { hz: a as u16 },
         Keyword::Dump => Command::Dump,
+        Keyword::Save => Command::Save,
+        Keyword::Settings => Command::Settings,
+        Keyword::Forget => Command::Forget,
     })
 }
 
@@ -380,5 +403,8 @@ pub fn format_command(cmd: &Command, out: &mut dyn TextOut) -> Result<(), Overfl
         }
         Command::Dump => push_str(out, "dump"),
         Command::Locate => push_str(out, "locate"),
+        Command::Save => push_str(out, "save"),
+        Command::Settings => push_str(out, "settings"),
+        Command::Forget => push_str(out, "forget"),
     }
 }

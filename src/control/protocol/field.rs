@@ -244,7 +244,7 @@ pub(super) fn centi_to_q8(centi: i32) -> i32 {
 }
 
 /// 1/256 command steps to 1/100 steps, rounded half away from zero.
-pub(super) fn q8_to_centi(q8: i32) -> i32 {
+pub(crate) fn q8_to_centi(q8: i32) -> i32 {
     let c = (q8.unsigned_abs().min(1 << 22).saturating_mul(100).saturating_add(128) >> 8) as i32; // < 2^29
     if q8 < 0 {
         c.wrapping_neg()

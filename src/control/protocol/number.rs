@@ -347,6 +347,19 @@ pub fn push_u32(out: &mut dyn TextOut, v: u32) -> Result<(), Overflow> {
     push_fixed_parts(out, false, v, 0)
 }
 
+/// Appends `0x` and the value in lower-case hex, without leading zeros
+/// (flash addresses).
+pub fn push_hex(out: &mut dyn TextOut, v: u32) -> Result<(), Overflow> {
+    const DIGITS: &[u8; 16] = b"0123456789abcdef";
+    push_str(out, "0x")?;
+    let digits = (32u32.saturating_sub(v.leading_zeros()).div_ceil(4)).max(1); // 1..=8
+    for k in (0..digits).rev() {
+        let nibble = (v >> k.saturating_mul(4)) & 0xF; // k < 8
+        push_byte(out, DIGITS.get(nibble as usize).copied().unwrap_or(b'?'))?;
+    }
+    Ok(())
+}
+
 /// Appends a signed integer.
 pub fn push_i32(out: &mut dyn TextOut, v: i32) -> Result<(), Overflow> {
     push_fixed(out, v, 0)

@@ -169,6 +169,7 @@ pub const HELP: &[&str] = &[
     "#  mission add <step>     append a timed fwd/back/cw/ccw, wait, goto, face or pose",
     "#  mission list|clear|start  show, forget, run (after a countdown; any byte aborts)",
     "#  log <Hz>               on-board log rows per second in a mission 0..100; dump sends it",
+    "#  save|settings|forget   settings in flash: keep (when stopped), show, erase",
     "# telemetry: CSV rows after a header line; lines starting with # are not telemetry",
 ];
 
@@ -183,6 +184,22 @@ fn q16_to_micro(a: u32) -> u32 {
     }
     // h <= H_MAX: 15625 h fits
     h.wrapping_mul(15_625).saturating_add(l.wrapping_mul(15_625).wrapping_add(1 << 9) >> 10)
+}
+
+/// `bias <x> <y> <z> scale <x> <y> <z>`: a calibration's values (biases in
+/// counts, scales to six decimals, as the config line).
+pub fn format_calibration_values(out: &mut dyn TextOut, cal: &MagCalibration) -> Result<(), Overflow> {
+    push_str(out, "bias")?;
+    for b in cal.bias {
+        push_str(out, " ")?;
+        push_i32(out, b)?;
+    }
+    push_str(out, " scale")?;
+    for q16 in cal.scale_q16 {
+        push_str(out, " ")?;
+        push_fixed_parts(out, q16 < 0, q16_to_micro(q16.unsigned_abs()), 6)?;
+    }
+    Ok(())
 }
 
 /// The answer line to a calibration sweep's end: `# ...` for a result (or

@@ -1,6 +1,7 @@
 //! Commands: bytes in, parsed lines carried out, answers out.
 
 use super::clock::Timer;
+use super::settings::{Source, NOT_SAVED};
 use super::{Controller, Hardware, LineSink, Mode};
 use crate::control::protocol::{format_response, format_status, Command, ParseError, Response, Side, HELP};
 use crate::control::survey::Failure;
@@ -35,16 +36,24 @@ impl<H: Hardware> Controller<H> {
         self.command_seen = true;
         self.command_received(sink);
         // a command ends a sweep or a localization (it runs instead)
-        if !matches!(cmd, Command::Status | Command::Help | Command::Rate { .. }) {
+        if !matches!(cmd, Command::Status | Command::Help | Command::Rate { .. } | Command::Settings) {
             match self.mode {
                 Mode::Calibrate { .. } => self.end_calibration(None, sink),
                 Mode::Locate { .. } => self.end_locate(Err(Failure::Interrupted), sink),
                 _ => {}
             }
         }
-        // a motion, a goto or face (which may be refused) and a mission
-        // start answer for themselves
-        if !matches!(cmd, Command::Drive { .. } | Command::Goto { .. } | Command::Face { .. } | Command::Mission(_)) {
+        // a motion, a goto or face, a mission start, a save or forget (which
+        // may be refused) answer for themselves
+        if !matches!(
+            cmd,
+            Command::Drive { .. }
+                | Command::Goto { .. }
+                | Command::Face { .. }
+                | Command::Mission(_)
+                | Command::Save
+                | Command::Forget
+        ) {
             self.respond(&Response::Ok(&cmd), sink);
         }
         match cmd {
@@ -72,6 +81,8 @@ impl<H: Hardware> Controller<H> {
                 if let Mode::Drive { drive, .. } = &mut self.mode {
                     *drive = self.model.drive(drive.motion);
                 }
+                self.sources.trims = Source::Changed;
+                self.respond(&Response::Note(NOT_SAVED), sink);
             }
             Command::SetPose { x_mm, y_mm, heading } => self.set_pose(Pose::from_mm(x_mm, y_mm, heading)),
             Command::Calibrate { samples } => self.begin_sweep(samples),
@@ -95,6 +106,9 @@ impl<H: Hardware> Controller<H> {
             Command::Log { hz } => self.set_log_rate(hz),
             Command::Dump => self.start_dump(sink),
             Command::Locate => self.begin_locate(),
+            Command::Save => self.save_settings(sink),
+            Command::Settings => self.report_settings(sink),
+            Command::Forget => self.forget_settings(sink),
         }
     }
 

@@ -3,6 +3,7 @@
 //! byte).
 
 use super::clock::{ms_to_us, Stamp, Timer};
+use super::settings::Source;
 use super::{Controller, Hardware, LineSink, Mode};
 use crate::config;
 use crate::control::log::RowLog;
@@ -55,8 +56,12 @@ impl<H: Hardware> Controller<H> {
         &self.missions.mission
     }
 
-    /// Restores a stored mission (at boot).
+    /// Restores a stored mission (at boot, from RTC memory: kept across a
+    /// reset, newer than the flash's when it differs).
     pub fn set_mission(&mut self, mission: Mission) {
+        if mission != self.missions.mission {
+            self.sources.mission = Source::Changed;
+        }
         self.missions.mission = mission;
     }
 
@@ -93,11 +98,13 @@ impl<H: Hardware> Controller<H> {
                     return self.respond(&Response::Fail("mission full: clear it or start it"), sink);
                 }
                 self.missions.changed = true;
+                self.sources.mission = Source::Changed;
                 self.respond(&Response::Ok(cmd), sink);
             }
             MissionOp::Clear => {
                 self.missions.mission.clear();
                 self.missions.changed = true;
+                self.sources.mission = Source::Changed;
                 self.respond(&Response::Ok(cmd), sink);
             }
             MissionOp::List => {

@@ -5,10 +5,12 @@
 
 use super::clock::Timer;
 use super::mode::Sweep;
+use super::settings::{Source, NOT_SAVED};
 use super::{Controller, Hardware, LineSink, Mode};
 use crate::config;
 use crate::control::protocol::number::push_str;
 use crate::control::protocol::response::{format_calibration_report, format_config_line};
+use crate::control::protocol::Response;
 use crate::driver::MagCalibrate;
 use crate::math::TurnRate;
 use crate::model::compass::{CalibrationError, MagCalibration, MagCalibrator};
@@ -74,6 +76,8 @@ impl<H: Hardware> Controller<H> {
             if push_str(&mut self.out, "# ").and_then(|()| format_config_line(&mut self.out, &cal)).is_ok() {
                 sink.write_line(&self.out);
             }
+            self.sources.calibration = Source::Changed;
+            self.respond(&Response::Note(NOT_SAVED), sink);
         }
     }
 }

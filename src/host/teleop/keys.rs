@@ -12,6 +12,7 @@
 //! | `-`, `_`, `z`          | previous speed level                     |
 //! | `r`                    | find the pose again (`locate`)           |
 //! | `p`                    | ask for the robot's `status` line        |
+//! | `k`                    | keep trims, calibration, mission (`save`) |
 //! | `h`, `?`               | show or hide the key help                |
 //! | `q`, Esc, Ctrl-C       | stop the robot and quit                  |
 //!
@@ -45,6 +46,8 @@ pub enum Action {
     Slower,
     Locate,
     Status,
+    /// Keep the robot's settings in flash (`save`; refused while it moves).
+    Save,
     ToggleHelp,
     Quit,
 }
@@ -67,6 +70,7 @@ pub fn action(key: Key) -> Option<Action> {
             '-' | '_' | 'z' => Action::Slower,
             'r' => Action::Locate,
             'p' => Action::Status,
+            'k' => Action::Save,
             'h' | '?' => Action::ToggleHelp,
             'q' => Action::Quit,
             _ => return None,
@@ -79,7 +83,8 @@ pub fn action(key: Key) -> Option<Action> {
 pub const HELP: &[&str] = &[
     "arrows / WASD: drive (held until space or another key)",
     "space or x: stop      + / -  (or e / z): speed level",
-    "r: find the pose (turns in place)   p: status   h: hide help   q / Esc: stop and quit",
+    "r: find the pose (turns in place)   p: status   k: save settings (stopped)",
+    "h: hide help   q / Esc: stop and quit",
 ];
 
 /// The command `r` sends.

@@ -133,6 +133,34 @@ where
     Ok(Err("no countdown line after `mission start`".into()))
 }
 
+/// Keeps the robot's settings and mission in flash (`save`): returns the
+/// robot's `# saved: ...` line, or its refusal (e.g. while it moves).
+pub fn save<P, O>(port: &mut P, out: &mut O) -> io::Result<Result<String, String>>
+where
+    P: Read + Write + ?Sized,
+    O: Write + ?Sized,
+{
+    let mut reader = LineReader::new();
+    // the answer and the line with the record and the pause come together
+    send(port, SAVE_COMMAND)?;
+    let begin = Instant::now();
+    while begin.elapsed().as_millis() < u128::from(config::teleop::ANSWER_WAIT_MS) {
+        for line in reader.poll(port)? {
+            writeln!(out, "{line}")?;
+            if line.starts_with("# saved") {
+                return Ok(Ok(line));
+            }
+            if line.starts_with("# err ") {
+                return Ok(Err(format!("`{SAVE_COMMAND}`: {line}")));
+            }
+        }
+    }
+    Ok(Err(format!("no `# saved` line after `{SAVE_COMMAND}`")))
+}
+
+/// The command that keeps the settings in flash (`--save`, the `k` key).
+pub const SAVE_COMMAND: &str = "save";
+
 /// What a download got.
 #[derive(Clone, PartialEq, Eq, Debug)]
 pub struct Download {

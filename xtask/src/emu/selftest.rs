@@ -152,7 +152,7 @@ fn input_time(run: &Run, line: &str) -> Result<u64, String> {
 
 /// Checks every pulse of the servo pins in `[from, to)` against the widths
 /// (left, right) and the frame.
-fn check_pulses(r: &mut Report, run: &Run, name: &str, from: u64, to: u64, widths_us: [f64; 2], e: &Expect) {
+pub(super) fn check_pulses(r: &mut Report, run: &Run, name: &str, from: u64, to: u64, widths_us: [f64; 2], e: &Expect) {
     for (pin, want) in SERVO_PINS.into_iter().zip(widths_us) {
         let pulses = run.events.pulses(pin, from, to);
         let widths: Vec<f64> = pulses.iter().map(|p| p.width_ns as f64 / 1e3).collect();
@@ -319,6 +319,7 @@ pub fn run(root: &Path, board: &Board, work: &Path, boot_bin: &Path, irom_bin: &
     servo(&mut report, board, work, &flash, &expect)?;
     deadman(&mut report, board, work, &flash, &expect)?;
     stop(&mut report, board, work, &flash, &expect)?;
+    super::flashtest::run(&mut report, board, work, &flash, &expect)?;
     watchdog(&mut report, root, board, work)?;
     super::strict::run(&mut report, root, board, work, &expect)?;
     println!("{} passed, {} failed", report.passed, report.failed);
