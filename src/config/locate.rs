@@ -21,22 +21,23 @@ pub const AMBIGUOUS_SPAN_MM: i32 = 60;
 /// span no more than `AMBIGUOUS_SPAN_MM` are one place anyway.
 pub const CLUSTER_GAP_MM: i32 = 3 * GRID_MM;
 /// A view taken after turns in place explains its readings within
-/// this more, mm: the turn's pivot is one of `PIVOTS_BEHIND_AXLE_MM`
-/// give or take 12.5 mm, which after a quarter turn moves the reference
-/// point by up to 18 mm, and a turn's own spread (the lab's 5 mm).
+/// this more, mm: a real turn pivots about a point behind the axle
+/// (`sim::PIVOT_BEHIND_AXLE_MM`, 10 mm, spread 5 mm), which moves the
+/// reference point off the turn-in-place model by up to twice that
+/// (after a half turn: 20 mm, 30 mm at two sigmas).
 pub const TURN_TOLERANCE_MM: f64 = 20.0;
 /// With more readings than this over all views, the search lets one of
-/// them go unexplained (a glancing reading's spurious echo,
-/// `sim::SPURIOUS_SHARE`; the hard world's 5 % spurious readings and mixed
-/// returns near corners): the rest still pin the pose.
+/// them go unexplained when nothing explains them all (a glancing
+/// reading's spurious echo, `sim::SPURIOUS_SHARE`): the rest still pin
+/// the pose.
 pub const MIN_READINGS_FOR_OUTLIER: u32 = 3;
-/// The compass offsets the search tries are this far apart, degrees (the
-/// compass's 2.5-degree spread, `estimator::COMPASS_SIGMA_DEG`) ...
+/// When nothing fits at the compass's heading, the search tries headings
+/// this far apart, degrees (the compass's 2.5-degree spread, `estimator::
+/// COMPASS_SIGMA_DEG`) ...
 pub const HEADING_STEP_DEG: f64 = 2.5;
-/// ... up to this many each way when nothing fits within `BIAS_STEPS`
-/// (30 degrees: the real drive's compass, `tests/data/lab2/drive1.csv`,
-/// is fitted by no pose within 10 degrees of its first reading; the box
-/// is only roughly aligned with north).
+/// ... up to this many each way (30 degrees: the real drive's compass,
+/// `tests/data/lab2/drive1.csv`, is fitted by no pose within 10 degrees
+/// of its first reading; the box is only roughly aligned with north).
 pub const HEADING_STEPS: u8 = 12;
 /// A reading whose beam would meet its wall past this incidence, at a
 /// point the search tries, says nothing about that point, degrees:
@@ -83,35 +84,6 @@ pub const BLOCKED_TURN_DEG: i32 = 20;
 /// which leaves the tick's own work room; a pass over the box takes 77
 /// ticks (0.8 s).
 pub const COLUMNS_PER_TICK: u32 = 2;
-/// The whole procedure's time limit, ms: eight views (5 s) and, after
-/// each from the third on, a search of up to 17 passes (the compass's
-/// bias range, `BIAS_STEPS`: 13 s each).
-pub const TIME_LIMIT_MS: u32 = 120_000;
-/// The compass's bias is the same at the views of one standing robot
-/// (taken at one place) but unknown: the search tries every offset
-/// `HEADING_STEP_DEG` apart up to this many steps each way and keeps the
-/// one that explains the views best (20 degrees: issue #29's +-12 over
-/// the floor and 20 near walls, `sim::HARD_COMPASS_WALL_DEG`); further,
-/// up to `HEADING_STEPS`, only while nothing fits.
-pub const BIAS_STEPS: u8 = 8;
-/// Each step of compass offset from the compass's own heading adds this
-/// to a pass's cost, mm (summed misses along the walls' normals): a prior
-/// that the compass is more often near right than far off (the lab's
-/// 2.5-degree spread, `estimator::COMPASS_SIGMA_DEG`), so views that fit
-/// nearly as well at several offsets take the compass's. A third of a
-/// reading's tolerance a step.
-pub const BIAS_PRIOR_MM_PER_STEP: f64 = 4.0;
-/// The turn's pivot behind the axle, tried by the search, mm: the lab's
-/// 10 (`sim::PIVOT_BEHIND_AXLE_MM`) and the hard world's 60 +- 20
-/// (`sim::HARD_PIVOT_BEHIND_AXLE_MM`, issue #29), each within 12.5 of
-/// one tried, which after a quarter turn moves the reference point by
-/// under `TURN_TOLERANCE_MM`.
-pub const PIVOTS_BEHIND_AXLE_MM: [i32; 4] = [10, 35, 60, 85];
-/// Another compass offset's best point, far from the best one's, fitting
-/// within this much of its cost makes the fix ambiguous, mm: one
-/// reading's tolerance.
-pub const RIVAL_MARGIN_MM: f64 = TOLERANCE_MM;
-/// So does another offset's this many heading steps or more from the
-/// best one's, fitting within that margin: the readings do not say which
-/// heading (two steps: 5 degrees, a right fix's limit).
-pub const RIVAL_STEPS: u32 = 2;
+/// The whole procedure's time limit, ms: eight views (5 s) and a
+/// search that tries every heading (50 passes, 39 s).
+pub const TIME_LIMIT_MS: u32 = 60_000;
