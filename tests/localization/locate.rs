@@ -13,7 +13,7 @@ use paperbot::model::locate::{locate, Fix, Readings, Search, MAX_VIEWS};
 use paperbot::model::measurement::Arena;
 use paperbot::model::LidarModel;
 use paperbot::sim::arena::Arena as SimArena;
-use paperbot::sim::body::{advance, Kinematics, MotionF64, PoseF64};
+use paperbot::sim::body::{advance, wrap_pi, Kinematics, MotionF64, PoseF64};
 use paperbot::sim::drawn::Drawn;
 use paperbot::sim::realism::{Realism, Trial};
 use paperbot::sim::robot::{body_fits, lidar_truth};
@@ -170,6 +170,54 @@ impl Tally {
     }
 }
 
+/// Why fixes are wrong: the heading only (the position within 30 mm), the
+/// position only, or both; and the compass's bias at the views (its mean
+/// over the views, and its spread between them: a common bias is what a
+/// search over compass offsets would model, the spread is not).
+#[derive(Default)]
+struct Why {
+    heading_only: usize,
+    position_only: usize,
+    both: usize,
+    /// (mean |bias|, bias spread) over the right fixes and the wrong ones,
+    /// degrees.
+    right_bias: Vec<(f64, f64)>,
+    wrong_bias: Vec<(f64, f64)>,
+}
+
+impl Why {
+    fn add(&mut self, fix: Option<&Fix>, truth: &PoseF64, biases: &[f64]) {
+        let Some(fix) = fix else { return };
+        let got = PoseF64::from_pose(&fix.pose);
+        let degs: Vec<f64> = biases.iter().map(|b| b.to_degrees()).collect();
+        let mean = degs.iter().sum::<f64>() / degs.len() as f64;
+        let spread = degs.iter().copied().fold(f64::MIN, f64::max) - degs.iter().copied().fold(f64::MAX, f64::min);
+        let (pos, head) = (got.distance(truth) <= 30.0, got.heading_error(truth).to_degrees().abs() <= 5.0);
+        match (pos, head) {
+            (true, true) => self.right_bias.push((mean.abs(), spread)),
+            (true, false) => self.heading_only += 1,
+            (false, true) => self.position_only += 1,
+            (false, false) => self.both += 1,
+        }
+        if !(pos && head) {
+            self.wrong_bias.push((mean.abs(), spread));
+        }
+    }
+
+    fn print(&self) {
+        let avg = |v: &[(f64, f64)]| {
+            let n = v.len().max(1) as f64;
+            (v.iter().map(|b| b.0).sum::<f64>() / n, v.iter().map(|b| b.1).sum::<f64>() / n)
+        };
+        let (r, w) = (avg(&self.right_bias), avg(&self.wrong_bias));
+        println!(
+            "  fixes found but wrong: {} the heading only, {} the position only, {} both; the compass's bias at the \
+             views (mean |bias|, spread between views): right fixes {:.1} / {:.1} deg, wrong {:.1} / {:.1} deg",
+            self.heading_only, self.position_only, self.both, r.0, r.1, w.0, w.1
+        );
+    }
+}
+
 /// The procedure from `starts` random starts in the world `world` makes
 /// for each: a view, then a turn of about 45 degrees clockwise and another
 /// view (counter-clockwise when the compass says the turn did not happen),
@@ -180,14 +228,17 @@ fn procedure(starts: usize, world: impl Fn(u64, &mut Rng) -> World) -> (Tally, T
     let mut rng = Rng::new(2315);
     let (mut two, mut done) = (Tally::default(), Tally::default());
     let mut views_used = [0usize; MAX_VIEWS + 1];
+    let mut why = Why::default();
     for start in 0..starts {
         let mut truth = random_pose_in_box(&mut rng);
         let w = world(start as u64, &mut rng);
         let mut views = vec![view(&w, &truth, &mut rng)];
+        let mut biases = vec![wrap_pi(views[0].heading.to_radians_f64() - truth.theta)];
         let mut degrees = 45.0;
         let fix = loop {
             truth = turn(&w, &truth, degrees, &mut rng);
             views.push(view(&w, &truth, &mut rng));
+            biases.push(wrap_pi(views[views.len() - 1].heading.to_radians_f64() - truth.theta));
             // a body against a wall may not turn that way: the compass says
             // so, and the next turns go the other way
             if let [.., a, b] = views.as_slice() {
@@ -204,9 +255,11 @@ fn procedure(starts: usize, world: impl Fn(u64, &mut Rng) -> World) -> (Tally, T
             }
         };
         views_used[views.len()] += 1;
+        why.add(fix.as_ref(), &truth, &biases);
         done.add(fix, &truth);
     }
     println!("  views taken (views, starts): {:?}", views_used.iter().enumerate().skip(3).collect::<Vec<_>>());
+    why.print();
     (two, done)
 }
 
@@ -235,14 +288,17 @@ fn views_turned_in_place_find_the_pose() {
 /// nothing, 825 wrong and not flagged (140 within 30 mm whatever the
 /// heading). Taking one effect out at a time (200 starts) helps most
 /// with the lab's pivot (54 of 200 right, 112 within 30 mm), then the
-/// lab's lidars (33), compass (23), turn rates (12). Asserted: no worse
+/// lab's lidars (33), compass (23), turn rates (12). It prints why the
+/// fixes found are wrong (heading, position, both) and the compass's bias
+/// at the views, its mean and its spread between them (`HARD_STARTS=200`
+/// for fewer starts). Asserted: no worse
 /// than measured; the issue's bar is printed, advisory. Ignored for its
 /// time (100 s in release: the failing searches try every heading):
 /// `cargo test --release --test localization locate:: -- --ignored --nocapture`.
 #[test]
 #[ignore = "100 s in release; prints the hard world's figures (issue #29's bar not met yet)"]
 fn views_turned_in_place_in_the_hard_world() {
-    let starts = 1_000;
+    let starts = std::env::var("HARD_STARTS").ok().and_then(|s| s.parse().ok()).unwrap_or(1_000);
     let (two, done) = procedure(starts, World::hard);
     two.print("hard world: locate, two views 45 degrees apart", starts);
     done.print("hard world: locate, three views and more while ambiguous", starts);
