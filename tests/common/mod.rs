@@ -28,3 +28,17 @@ pub fn parse_calibration_line(line: &str) -> ([f64; 3], [f64; 3]) {
     assert_eq!(nums.len(), 6, "{line}");
     ([nums[0], nums[1], nums[2]], [nums[3], nums[4], nums[5]])
 }
+
+/// CRC-32 (ISO-HDLC, the settings record's) written out bitwise, independent
+/// of the crate the firmware uses: to check a record, or write one another
+/// firmware might have.
+pub fn crc32(words: &[u32]) -> u32 {
+    let mut crc = u32::MAX;
+    for b in words.iter().flat_map(|w| w.to_le_bytes()) {
+        crc ^= u32::from(b);
+        for _ in 0..8 {
+            crc = if crc & 1 != 0 { (crc >> 1) ^ 0xEDB8_8320 } else { crc >> 1 };
+        }
+    }
+    !crc
+}

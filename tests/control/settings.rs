@@ -5,6 +5,7 @@
 //! one, sequence numbers wrap, `forget` erases both, and the flash double
 //! keeps NOR semantics (a write only clears bits).
 
+use crate::common;
 use paperbot::config::settings::{SECTORS, VERSION};
 use paperbot::control::mission::{Mission, Step};
 use paperbot::control::settings::{
@@ -37,21 +38,9 @@ fn learned() -> Settings {
 /// `r` with its CRC recomputed (a record that another firmware might have
 /// written correctly).
 fn resealed(mut r: [u32; RECORD_WORDS]) -> [u32; RECORD_WORDS] {
-    let crc = crc32fast_like(&r[..RECORD_WORDS - 1]);
+    let crc = common::crc32(&r[..RECORD_WORDS - 1]);
     r[RECORD_WORDS - 1] = crc;
     r
-}
-
-/// CRC-32 (ISO-HDLC) written out bitwise here, independent of the crate.
-fn crc32fast_like(words: &[u32]) -> u32 {
-    let mut crc = u32::MAX;
-    for b in words.iter().flat_map(|w| w.to_le_bytes()) {
-        crc ^= u32::from(b);
-        for _ in 0..8 {
-            crc = if crc & 1 != 0 { (crc >> 1) ^ 0xEDB8_8320 } else { crc >> 1 };
-        }
-    }
-    !crc
 }
 
 #[test]
@@ -61,7 +50,7 @@ fn a_record_survives_its_encoding() {
     assert_eq!(r[0], 0x5042_5354, "magic PBST");
     assert_eq!(r[1], VERSION);
     assert_eq!(r[2], 7);
-    assert_eq!(r[RECORD_WORDS - 1], crc32fast_like(&r[..RECORD_WORDS - 1]), "CRC-32 ISO-HDLC of the LE bytes");
+    assert_eq!(r[RECORD_WORDS - 1], common::crc32(&r[..RECORD_WORDS - 1]), "CRC-32 ISO-HDLC of the LE bytes");
     assert_eq!(decode(&r), Ok((s, 7)));
     let config = Settings::from_config();
     assert_eq!(decode(&encode(&config, u32::MAX)), Ok((config, u32::MAX)));

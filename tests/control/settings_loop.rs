@@ -5,6 +5,7 @@
 //! short by a power cut gives the older record or the config, with the
 //! reason; a save is refused while the robot moves and changes nothing.
 
+use crate::common;
 use paperbot::config;
 use paperbot::config::settings::VERSION;
 use paperbot::control::settings::{encode, MemoryFlash, Settings, RECORD_WORDS};
@@ -101,18 +102,6 @@ fn a_damaged_record_is_ignored_with_the_reason_and_the_config_used() {
     assert_eq!(robot.controller_mut().compass().calibration(), config::compass::CALIBRATION);
 }
 
-/// CRC-32 (ISO-HDLC) bitwise, to write a record another firmware might have.
-fn crc32(words: &[u32]) -> u32 {
-    let mut crc = u32::MAX;
-    for b in words.iter().flat_map(|w| w.to_le_bytes()) {
-        crc ^= u32::from(b);
-        for _ in 0..8 {
-            crc = if crc & 1 != 0 { (crc >> 1) ^ 0xEDB8_8320 } else { crc >> 1 };
-        }
-    }
-    !crc
-}
-
 #[test]
 fn a_record_of_another_version_is_ignored_and_the_older_one_used() {
     let mut flash = MemoryFlash::default();
@@ -121,7 +110,7 @@ fn a_record_of_another_version_is_ignored_and_the_older_one_used() {
     flash.sectors[0] = encode(&older, 4);
     let mut v2 = encode(&Settings::from_config(), 5);
     v2[1] = VERSION + 1;
-    v2[RECORD_WORDS - 1] = crc32(&v2[..RECORD_WORDS - 1]);
+    v2[RECORD_WORDS - 1] = common::crc32(&v2[..RECORD_WORDS - 1]);
     flash.sectors[1] = v2;
     let mut robot = SimRobot::with_flash(cfg(), flash);
     assert_eq!(
