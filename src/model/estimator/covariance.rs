@@ -65,11 +65,15 @@ impl Covariance {
     }
 
     /// `P_ij` (Q12 mm^2); 0 for an index past [`N`].
+    // tick bar: inlined, as its five kin (lx106/BENCHMARKS.md, "Control
+    // tick")
     #[inline(always)]
     pub fn get(&self, i: usize, j: usize) -> i32 {
         self.upper.get(index(i, j)).copied().unwrap_or(0)
     }
 
+    // tick bar: inlined, as its five kin (lx106/BENCHMARKS.md, "Control
+    // tick")
     #[inline(always)]
     pub(super) fn set(&mut self, i: usize, j: usize, v: i32) {
         if let Some(e) = self.upper.get_mut(index(i, j)) {
@@ -77,6 +81,8 @@ impl Covariance {
         }
     }
 
+    // tick bar: inlined, as its five kin (lx106/BENCHMARKS.md, "Control
+    // tick")
     #[inline(always)]
     pub(super) fn add(&mut self, i: usize, j: usize, v: i32) {
         self.set(i, j, self.get(i, j).saturating_add(v));
@@ -233,6 +239,8 @@ impl Covariance {
 
 /// How far the packed index of `P_k,r` moves from `k` to `k + 1` (row `r`
 /// read down its column above the diagonal, then along its row).
+// tick bar: inlined, as its five kin (lx106/BENCHMARKS.md, "Control
+// tick")
 #[inline(always)]
 fn step(k: usize, r: usize) -> usize {
     if k < r {
@@ -249,6 +257,8 @@ fn step(k: usize, r: usize) -> usize {
 /// product and tick made the small variances 3 % too small against the f64
 /// reference (`tests/estimator/reference.rs`); the noise a tick adds is
 /// tens of LSB.
+// tick bar: inlined, as its five kin (lx106/BENCHMARKS.md, "Control
+// tick")
 #[inline(always)]
 fn mul_q30_fine(a: i32, f: i32) -> i32 {
     if a.unsigned_abs() < 1 << 23 {

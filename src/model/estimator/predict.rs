@@ -166,6 +166,8 @@ impl Filter {
 /// [`Filter::keep_in`] for one coordinate: into `[low, high]` mm by its
 /// high word (`|c| < 2^63`: it fits). (For bounds the wrong way round the
 /// upper wins: no panic.)
+// tick bar: inlined, as its five kin (lx106/BENCHMARKS.md, "Control
+// tick")
 #[inline(always)]
 pub(super) fn clamp_mm(c: &mut Coord, low: i32, high: i32) {
     let mm = (c.0 >> 32) as i32;
