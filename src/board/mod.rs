@@ -14,8 +14,8 @@
 //!
 //! The chip glue, [`esp8266`](self) (`esp8266.rs`), exists only for
 //! `target_arch = "xtensa"` with the `board` feature: esp8266-hal pins as
-//! [`bitbang_i2c::I2cPins`], the FRC1 interrupt, UART0, watchdog, LED and the
-//! panic handler; [`rtc_store`](self) (`rtc_store.rs`) keeps a mission in
+//! [`bitbang_i2c::I2cPins`], the FRC1 interrupt, UART0, watchdog and LED;
+//! [`halt`](self) (`halt.rs`) stops for good, the panic handler too; [`rtc_store`](self) (`rtc_store.rs`) keeps a mission in
 //! RTC memory across resets; [`rom_flash`](self) (`rom_flash.rs`) reaches
 //! the settings sectors through the ROM's flash routines. The firmware
 //! binary is `src/bin/firmware.rs`.
@@ -26,6 +26,9 @@ pub mod uart;
 
 #[cfg(all(target_arch = "xtensa", feature = "board"))]
 pub mod esp8266;
+/// Halt and the panic handler (see the file).
+#[cfg(all(target_arch = "xtensa", feature = "board"))]
+pub mod halt;
 /// The settings sectors through the ROM's flash routines (see the file).
 #[cfg(all(target_arch = "xtensa", feature = "board"))]
 pub mod rom_flash;
