@@ -8,7 +8,9 @@
 //! the newest `N` rows: when it is full the oldest goes and is counted as
 //! dropped. The firmware keeps its log in a static, so that its size counts
 //! in the image's DRAM budget; the control loop reaches it through
-//! [`RowLog`].
+//! [`RowLog`]. At a mission's end the loop keeps the log in flash
+//! (`control::settings::kept_log`), a row as [`ROW_WORDS`] words
+//! ([`LogRow::to_words`]).
 
 use crate::control::protocol::{FaultCounters, TelemetryRow};
 use crate::model::estimator::Tracking;
@@ -25,6 +27,9 @@ const COMPASS: u32 = 1 << 26;
 const HEADING_BITS: u32 = (1 << 19) - 1; // 360_000 < 2^19
 /// The estimator's state, two bits from here.
 const TRACKING_SHIFT: u32 = 27;
+
+/// Words of a [`LogRow`] in flash: five 32-bit columns and twenty halves.
+pub const ROW_WORDS: usize = 15;
 
 /// One telemetry row, packed (see the module docs).
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
@@ -145,6 +150,80 @@ impl LogRow {
                 1 => Tracking::Ambiguous,
                 _ => Tracking::Unknown,
             },
+        }
+    }
+}
+
+impl LogRow {
+    /// The row as words for flash: the 32-bit columns, then the 16-bit
+    /// ones two to a word, low half first.
+    pub fn to_words(&self) -> [u32; ROW_WORDS] {
+        let [m0, m1, m2] = self.mag_raw.map(|v| v as u16);
+        let [f0, f1, f2] = self.mag_field.map(|v| v as u16);
+        let [q0, q1, q2, q3, q4, q5] = self.faults;
+        let halves = [
+            self.rate as u16,
+            self.left_cmd_centi,
+            self.right_cmd_centi,
+            self.front_raw_mm,
+            self.front_dmm as u16,
+            self.right_raw_mm,
+            self.right_dmm as u16,
+            m0,
+            m1,
+            m2,
+            f0,
+            f1,
+            f2,
+            q0,
+            q1,
+            q2,
+            q3,
+            q4,
+            q5,
+            0,
+        ];
+        let mut words = [0u32; ROW_WORDS];
+        let whole = [self.t_ms, self.x_dmm as u32, self.y_dmm as u32, self.packed, self.compass_mdeg];
+        let paired = halves.chunks_exact(2).map(|p| match *p {
+            [lo, hi] => u32::from(lo) | u32::from(hi) << 16,
+            _ => 0, // chunks_exact(2) gives pairs only
+        });
+        for (slot, w) in words.iter_mut().zip(whole.into_iter().chain(paired)) {
+            *slot = w;
+        }
+        words
+    }
+
+    /// The row [`LogRow::to_words`] wrote (any words give a row: the
+    /// kept log's CRC is what says they are one).
+    pub fn from_words(words: &[u32; ROW_WORDS]) -> LogRow {
+        let [t_ms, x, y, packed, compass_mdeg, pairs @ ..] = *words;
+        let mut h = [0u16; 20];
+        for (half, pair) in h.chunks_exact_mut(2).zip(pairs) {
+            if let [lo, hi] = half {
+                *lo = pair as u16;
+                *hi = (pair >> 16) as u16;
+            }
+        }
+        let [rate, left, right, front_raw, front_d, right_raw, right_d, m0, m1, m2, f0, f1, f2, q0, q1, q2, q3, q4, q5, _] =
+            h;
+        LogRow {
+            t_ms,
+            x_dmm: x as i32,
+            y_dmm: y as i32,
+            packed,
+            compass_mdeg,
+            rate: rate as i16,
+            left_cmd_centi: left,
+            right_cmd_centi: right,
+            front_raw_mm: front_raw,
+            front_dmm: front_d as i16,
+            right_raw_mm: right_raw,
+            right_dmm: right_d as i16,
+            mag_raw: [m0, m1, m2].map(|v| v as i16),
+            mag_field: [f0, f1, f2].map(|v| v as i16),
+            faults: [q0, q1, q2, q3, q4, q5],
         }
     }
 }
@@ -305,6 +384,9 @@ mod tests {
         fwd.front_raw_mm = None;
         assert_eq!(LogRow::pack(&fwd).unpack(), fwd);
         assert_eq!(core::mem::size_of::<LogRow>(), 60);
+        for packed in [LogRow::pack(&r), LogRow::pack(&fwd)] {
+            assert_eq!(LogRow::from_words(&packed.to_words()), packed);
+        }
     }
 
     #[test]

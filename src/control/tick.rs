@@ -252,10 +252,14 @@ impl<H: Hardware> Controller<H> {
             }
         }
 
-        // 6. telemetry (and in a mission the on-board log)
+        // 6. telemetry (and in a mission the on-board log; after it, the
+        // log kept in flash once the robot stands)
         self.telemetry(now, sink);
         if self.missions.run.is_some() {
             self.log_row(now);
+        }
+        if self.missions.log_unkept {
+            self.keep_log(sink);
         }
     }
 

@@ -7,6 +7,7 @@ mod common;
 
 mod basics;
 mod faults_long;
+mod kept_log;
 mod settings;
 mod settings_loop;
 mod soak;

@@ -244,17 +244,20 @@ fn flash_end(file: &object::File) -> u32 {
     end
 }
 
-/// The image must end before the settings record's sectors.
+/// The image must end before the kept log's slots and the settings
+/// record's sectors (the lowest of them: `FIRST_SECTOR`).
 fn check_flash_end(end: u32) -> Result<String, String> {
     let first = settings::FIRST_SECTOR;
     if end <= first {
         Ok(format!(
-            "flash code ends at offset {end:#08x}, before the settings sectors {:#08x} and {:#08x} (config::settings)",
+            "flash code ends at offset {end:#08x}, before the log's slots {:#08x} and {:#08x} and the settings sectors {:#08x} and {:#08x} (config::settings)",
+            settings::LOG_SLOTS[0],
+            settings::LOG_SLOTS[1],
             settings::SECTORS[0],
             settings::SECTORS[1]
         ))
     } else {
-        Err(format!("flash code ends at offset {end:#08x}, over the settings sectors from {first:#08x}"))
+        Err(format!("flash code ends at offset {end:#08x}, over the log's and settings' sectors from {first:#08x}"))
     }
 }
 
@@ -537,10 +540,11 @@ mod tests {
     }
 
     #[test]
-    fn the_image_must_end_before_the_settings_sectors() {
-        assert!(check_flash_end(0x2_0000).unwrap().contains("before the settings sectors 0x3f9000 and 0x3fa000"));
-        assert!(check_flash_end(0x3F_9000).is_ok());
-        assert!(check_flash_end(0x3F_9001).unwrap_err().contains("over the settings sectors from 0x3f9000"));
+    fn the_image_must_end_before_the_logs_and_the_settings_sectors() {
+        let ok = check_flash_end(0x2_0000).unwrap();
+        assert!(ok.contains("before the log's slots 0x3f3000 and 0x3f6000 and the settings sectors 0x3f9000 and 0x3fa000"));
+        assert!(check_flash_end(0x3F_3000).is_ok());
+        assert!(check_flash_end(0x3F_3001).unwrap_err().contains("over the log's and settings' sectors from 0x3f3000"));
     }
 
     #[test]

@@ -19,7 +19,8 @@
 //! boot the newer valid record wins. The flash itself is behind [`Flash`]: the
 //! ESP8266 ROM's routines on the robot, [`MemoryFlash`] (NOR semantics: an
 //! erase sets every bit, a write only clears bits) on the host and in the
-//! simulator.
+//! simulator. The same flash keeps the on-board log at a mission's end
+//! ([`kept_log`]).
 
 use crate::config;
 use crate::config::settings::VERSION;
@@ -99,15 +100,32 @@ impl Refusal {
     }
 }
 
-/// CRC-32 (ISO-HDLC, the zlib/Ethernet one) of the words' little-endian
-/// bytes, bitwise: no table in DRAM, about 350 bytes a save or a boot.
-fn crc32(words: &[u32]) -> u32 {
-    const CRC: crc::Crc<u32, crc::NoTable> = crc::Crc::<u32, crc::NoTable>::new(&crc::CRC_32_ISO_HDLC);
-    let mut digest = CRC.digest();
-    for w in words {
-        digest.update(&w.to_le_bytes());
+/// CRC-32 (ISO-HDLC, the zlib/Ethernet one) of words' little-endian
+/// bytes as they stream by, bitwise: no table in DRAM, about 350 bytes a
+/// save or a boot (12 KB for a kept log: `kept_log`).
+struct Crc32(crc::Digest<'static, u32, crc::NoTable>);
+
+static CRC32: crc::Crc<u32, crc::NoTable> = crc::Crc::<u32, crc::NoTable>::new(&crc::CRC_32_ISO_HDLC);
+
+impl Crc32 {
+    fn new() -> Crc32 {
+        Crc32(CRC32.digest())
     }
-    digest.finalize()
+    fn update(&mut self, words: &[u32]) {
+        for w in words {
+            self.0.update(&w.to_le_bytes());
+        }
+    }
+    fn finish(self) -> u32 {
+        self.0.finalize()
+    }
+}
+
+/// The CRC-32 of `words` (see [`Crc32`]).
+fn crc32(words: &[u32]) -> u32 {
+    let mut c = Crc32::new();
+    c.update(words);
+    c.finish()
 }
 
 /// The record of `s` with sequence number `sequence`.
@@ -181,5 +199,6 @@ fn newer(a: u32, b: u32) -> bool {
     (a.wrapping_sub(b) as i32) > 0
 }
 
+pub mod kept_log;
 mod store;
 pub use store::*;

@@ -1,10 +1,14 @@
 //! The flash behind the settings: the [`Flash`] the ROM's routines give,
-//! the store that takes the record by turns in two sectors
-//! ([`FlashSettings`]), and the stand-ins ([`NoFlash`], [`MemoryFlash`]).
+//! the store that takes the record by turns in two sectors and keeps the
+//! on-board log ([`FlashSettings`]), and the stand-ins ([`NoFlash`],
+//! [`MemoryFlash`]).
 
+use super::kept_log::{self, KeptLog, LogsFound, LOG_WORDS};
 use super::{check, decode, encode, newer, Record, Refusal, Settings, RECORD_WORDS};
 use crate::config;
-use crate::config::settings::SECTORS;
+use crate::config::settings::{LOG_SLOTS, SECTORS};
+use crate::control::log::RowLog;
+use crate::control::protocol::TelemetryRow;
 
 /// A flash operation failed: the ROM's `SpiFlashOpResult` (ERR, TIMEOUT)
 /// or an address the routines refuse.
@@ -28,7 +32,8 @@ pub trait Flash {
     fn now_us(&self) -> u32;
 }
 
-/// What a save did.
+/// What a save did (of the settings, or of the log: `sector` is then the
+/// log's slot).
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
 pub struct Saved {
     /// The sector written.
@@ -47,7 +52,8 @@ pub struct Loaded {
     pub refused: [Option<Refusal>; 2],
 }
 
-/// Where the loop keeps its settings: [`FlashSettings`] over the board's
+/// Where the loop keeps what survives power-off, its settings and the
+/// on-board log at a mission's end: [`FlashSettings`] over the board's
 /// flash, or over [`MemoryFlash`] in tests and the simulator.
 pub trait SettingsStore {
     /// Reads both sectors.
@@ -56,6 +62,12 @@ pub trait SettingsStore {
     fn save(&mut self, s: &Settings) -> Result<Saved, FlashError>;
     /// Erases both sectors (back to the config); the pause in us.
     fn forget(&mut self) -> Result<u32, FlashError>;
+    /// Keeps `log` (its rows at `hz`) as the newest kept log.
+    fn keep_log(&mut self, log: &impl RowLog, hz: u16) -> Result<Saved, FlashError>;
+    /// The kept logs' two slots, checked.
+    fn kept_logs(&mut self) -> Result<LogsFound, FlashError>;
+    /// Row `i` of a kept log (`None` past its end).
+    fn kept_row(&mut self, log: &KeptLog, i: usize) -> Result<Option<TelemetryRow>, FlashError>;
 }
 
 /// The record in two sectors of a [`Flash`], written by turns (see the
@@ -130,6 +142,18 @@ impl<F: Flash> SettingsStore for FlashSettings<F> {
         }
         Ok(self.flash.now_us().wrapping_sub(start))
     }
+
+    fn keep_log(&mut self, log: &impl RowLog, hz: u16) -> Result<Saved, FlashError> {
+        kept_log::keep(&mut self.flash, log, hz)
+    }
+
+    fn kept_logs(&mut self) -> Result<LogsFound, FlashError> {
+        kept_log::find(&mut self.flash)
+    }
+
+    fn kept_row(&mut self, log: &KeptLog, i: usize) -> Result<Option<TelemetryRow>, FlashError> {
+        kept_log::row(&mut self.flash, log, i)
+    }
 }
 
 /// A board without settings storage: zero-sized (as the firmware's
@@ -154,34 +178,49 @@ impl Flash for NoFlash {
 }
 
 /// Flash in memory with NOR semantics, modelling the two settings sectors
-/// up to a record's length (host tests and the simulator). `power_left`
+/// up to a record's length and the two log slots up to a full log's (host
+/// tests and the simulator); any other address is refused. `power_left`
 /// counts the word writes and erases the power lasts for (`None`: for
 /// ever): after it runs out every operation fails and changes nothing, as
 /// on a board switched off mid-save.
 #[derive(Clone, PartialEq, Eq, Debug)]
 pub struct MemoryFlash {
     pub sectors: [Record; 2],
+    /// The log slots' first [`LOG_WORDS`] words.
+    pub logs: [[u32; LOG_WORDS]; 2],
     pub power_left: Option<u32>,
 }
 
 impl Default for MemoryFlash {
     /// Erased flash.
     fn default() -> Self {
-        MemoryFlash { sectors: [[u32::MAX; RECORD_WORDS]; 2], power_left: None }
+        MemoryFlash { sectors: [[u32::MAX; RECORD_WORDS]; 2], logs: [[u32::MAX; LOG_WORDS]; 2], power_left: None }
     }
 }
 
 impl MemoryFlash {
-    /// The modelled sector at `addr` and the word index in it.
-    fn locate(&mut self, addr: u32, len: usize) -> Result<(&mut Record, usize), FlashError> {
-        let sector_bytes = config::settings::SECTOR_BYTES;
-        let base = addr.wrapping_sub(addr % sector_bytes); // <= addr
-        let i = SECTORS.iter().position(|&s| s == base).ok_or(FlashError::Error)?;
-        let offset = (addr.wrapping_sub(base) / 4) as usize;
-        if addr % 4 != 0 || offset.saturating_add(len) > RECORD_WORDS {
+    /// The modelled words from `addr` to the end of its region (a settings
+    /// sector's record, a log slot's log).
+    fn words_from(&mut self, addr: u32) -> Result<&mut [u32], FlashError> {
+        if addr % 4 != 0 {
             return Err(FlashError::Error);
         }
-        Ok((self.sectors.get_mut(i).ok_or(FlashError::Error)?, offset))
+        let regions = SECTORS
+            .iter()
+            .zip(self.sectors.iter_mut().map(|r| r.as_mut_slice()))
+            .chain(LOG_SLOTS.iter().zip(self.logs.iter_mut().map(|l| l.as_mut_slice())));
+        for (&base, words) in regions {
+            let offset = (addr.wrapping_sub(base) / 4) as usize;
+            if addr >= base && offset < words.len() {
+                return words.get_mut(offset..).ok_or(FlashError::Error);
+            }
+        }
+        Err(FlashError::Error)
+    }
+
+    /// The `len` modelled words at `addr`.
+    fn locate(&mut self, addr: u32, len: usize) -> Result<&mut [u32], FlashError> {
+        self.words_from(addr)?.get_mut(..len).ok_or(FlashError::Error)
     }
 
     /// One more operation on the power left.
@@ -199,27 +238,24 @@ impl MemoryFlash {
 
 impl Flash for MemoryFlash {
     fn read(&mut self, addr: u32, words: &mut [u32]) -> Result<(), FlashError> {
-        let (sector, offset) = self.locate(addr, words.len())?;
-        for (w, s) in words.iter_mut().zip(sector.iter().skip(offset)) {
-            *w = *s;
-        }
+        words.copy_from_slice(self.locate(addr, words.len())?);
         Ok(())
     }
     fn erase_sector(&mut self, addr: u32) -> Result<(), FlashError> {
+        let sector_words = (config::settings::SECTOR_BYTES / 4) as usize;
         if addr % config::settings::SECTOR_BYTES != 0 {
             return Err(FlashError::Error);
         }
-        self.locate(addr, 0)?;
+        self.words_from(addr)?;
         self.power()?;
-        self.locate(addr, 0)?.0.fill(u32::MAX);
+        self.words_from(addr)?.iter_mut().take(sector_words).for_each(|w| *w = u32::MAX);
         Ok(())
     }
     fn write(&mut self, addr: u32, words: &[u32]) -> Result<(), FlashError> {
         self.locate(addr, words.len())?;
         for (k, &w) in words.iter().enumerate() {
             self.power()?;
-            let (sector, offset) = self.locate(addr, words.len())?;
-            if let Some(s) = sector.get_mut(offset.saturating_add(k)) {
+            if let Some(s) = self.locate(addr, words.len())?.get_mut(k) {
                 *s &= w; // NOR flash: a write only clears bits
             }
         }

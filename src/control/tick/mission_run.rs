@@ -38,11 +38,13 @@ pub(super) struct Missions {
     pub changed: bool,
     /// The stored mission's steps.
     pub mission: Mission,
+    /// The on-board log holds a mission's rows not yet kept in flash.
+    pub log_unkept: bool,
 }
 
 impl Missions {
     pub const fn new() -> Missions {
-        Missions { run: None, changed: false, mission: Mission::new() }
+        Missions { run: None, changed: false, mission: Mission::new(), log_unkept: false }
     }
     /// A mission runs its steps (its countdown is over).
     pub fn running(&self) -> bool {
@@ -126,7 +128,7 @@ impl<H: Hardware> Controller<H> {
                 }
                 self.respond(&Response::Ok(cmd), sink);
                 self.mode = Mode::Idle;
-                self.reports.dump_next = None;
+                self.reports.dump = None;
                 self.missions.run = Some(MissionRun { phase: MissionPhase::Countdown, since_us: None, step: 0 });
                 self.out.clear();
                 let line = push_str(&mut self.out, "# mission starts in ")
@@ -165,6 +167,7 @@ impl<H: Hardware> Controller<H> {
                     run.phase = MissionPhase::Running;
                     run.since_us = Some(now);
                     self.log.clear();
+                    self.missions.log_unkept = true;
                     self.reports.logging.next_us = now;
                     self.front.unlogged = false;
                     self.right.unlogged = false;

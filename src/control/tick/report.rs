@@ -1,12 +1,16 @@
 //! What the loop reports and when: telemetry rows at their rate (after
 //! the header), rows into the on-board log at theirs while a mission
-//! runs, and `dump`, which sends the log in place of telemetry.
+//! runs, and `dump`, which sends the log in place of telemetry: the one
+//! in RAM, or when that is empty (after a power-off) the one kept in
+//! flash at the last mission's end (`tick/settings.rs`).
 
 use super::clock::{reached, Stamp};
 use super::{Controller, Hardware, LineSink};
 use crate::config;
 use crate::control::log::RowLog;
-use crate::control::protocol::number::{push_str, push_u32};
+use crate::control::protocol::number::{push_hex, push_str, push_u32};
+use crate::control::settings::kept_log::KeptLog;
+use crate::control::settings::{Refusal, SettingsStore};
 use crate::control::protocol::{format_row, format_telemetry, telemetry_header, Telemetry, TelemetryRow};
 use crate::math::div_u64;
 
@@ -46,14 +50,23 @@ impl Schedule {
     }
 }
 
+/// A `dump` under way.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub(super) struct Dump {
+    /// The next row it sends.
+    next: usize,
+    /// The log it sends: the kept one in flash, or (`None`) the RAM's.
+    kept: Option<KeptLog>,
+}
+
 /// The reporting state: the two schedules and a dump under way.
 pub(super) struct Reports {
     pub telemetry: Schedule,
     /// The telemetry header goes before the next row.
     pub header_due: bool,
     pub logging: Schedule,
-    /// The next log row `dump` sends (while it is sending).
-    pub dump_next: Option<usize>,
+    /// The dump being sent, if any.
+    pub dump: Option<Dump>,
 }
 
 impl Reports {
@@ -64,7 +77,7 @@ impl Reports {
             telemetry: Schedule::new(INITIAL_HZ),
             header_due: INITIAL_HZ != 0,
             logging: Schedule::new(config::log::HZ),
-            dump_next: None,
+            dump: None,
         }
     }
 }
@@ -89,7 +102,7 @@ impl<H: Hardware> Controller<H> {
     /// A telemetry row when one is due (or, during a `dump`, the log's
     /// rows instead: telemetry would mix with them).
     pub(super) fn telemetry(&mut self, now: Stamp, sink: &mut impl LineSink) {
-        if self.reports.dump_next.is_some() {
+        if self.reports.dump.is_some() {
             return self.dump_rows(sink);
         }
         if !self.reports.telemetry.due(now) {
@@ -129,37 +142,89 @@ impl<H: Hardware> Controller<H> {
         self.reports.logging.set_rate(hz);
     }
 
-    /// `dump`: a summary line and the header now, a row a tick after.
+    /// `dump`: a summary line and the header now, a row a tick after. The
+    /// RAM's log, or when it holds no row the newest kept in flash.
     pub(super) fn start_dump(&mut self, sink: &mut impl LineSink) {
-        self.out.clear();
-        let line = push_str(&mut self.out, "# log ")
-            .and_then(|()| push_u32(&mut self.out, self.log.len() as u32)) // <= config::log::ROWS
-            .and_then(|()| push_str(&mut self.out, " rows at "))
-            .and_then(|()| push_u32(&mut self.out, u32::from(self.reports.logging.hz)))
-            .and_then(|()| push_str(&mut self.out, " Hz, "))
-            .and_then(|()| push_u32(&mut self.out, self.log.dropped()))
-            .and_then(|()| push_str(&mut self.out, " dropped (oldest first)"));
-        if line.is_ok() {
-            sink.write_line(&self.out);
-        }
+        let kept = if self.log.is_empty() { self.newest_kept_log(sink) } else { None };
+        let (rows, hz, dropped) = match kept {
+            Some(k) => (k.rows, k.hz, k.dropped),
+            None => (self.log.len() as u32, self.reports.logging.hz, self.log.dropped()), // <= config::log::ROWS
+        };
+        self.say(sink, |o| {
+            push_str(o, "# log ")?;
+            push_u32(o, rows)?;
+            push_str(o, " rows at ")?;
+            push_u32(o, u32::from(hz))?;
+            push_str(o, " Hz, ")?;
+            push_u32(o, dropped)?;
+            push_str(o, " dropped (oldest first)")?;
+            match kept {
+                Some(k) => {
+                    push_str(o, ", kept in flash, log ")?;
+                    push_u32(o, k.sequence)
+                }
+                None => Ok(()),
+            }
+        });
         sink.write_line(telemetry_header());
-        self.reports.dump_next = Some(0);
+        self.reports.dump = Some(Dump { next: 0, kept });
+    }
+
+    /// The newest valid log in flash; a slot holding something else is
+    /// named with the reason.
+    fn newest_kept_log(&mut self, sink: &mut impl LineSink) -> Option<KeptLog> {
+        let found = match self.settings.kept_logs() {
+            Ok(found) => found,
+            Err(e) => {
+                self.say(sink, |o| {
+                    push_str(o, crate::control::protocol::ERR)?;
+                    push_str(o, "kept log unread: ")?;
+                    push_str(o, super::settings::flash_error(e))
+                });
+                return None;
+            }
+        };
+        for (slot, refusal) in config::settings::LOG_SLOTS.iter().zip(found.refused) {
+            let Some(refusal) = refusal.filter(|r| *r != Refusal::Blank) else { continue };
+            self.say(sink, |o| {
+                push_str(o, "# kept log at ")?;
+                push_hex(o, *slot)?;
+                push_str(o, " ignored: ")?;
+                push_str(o, refusal.reason())
+            });
+        }
+        found.newest
     }
 
     /// The next rows of a dump (in place of telemetry), then `# log end`.
     pub(super) fn dump_rows(&mut self, sink: &mut impl LineSink) {
         for _ in 0..config::log::DUMP_ROWS_PER_TICK {
-            let Some(i) = self.reports.dump_next else { return };
-            let Some(row) = self.log.row(i) else {
-                self.reports.dump_next = None;
-                sink.write_line("# log end");
-                return;
+            let Some(dump) = self.reports.dump else { return };
+            let row = match &dump.kept {
+                Some(kept) => self.settings.kept_row(kept, dump.next),
+                None => Ok(self.log.row(dump.next)),
+            };
+            let row = match row {
+                Ok(Some(row)) => row,
+                Ok(None) => {
+                    self.reports.dump = None;
+                    sink.write_line("# log end");
+                    return;
+                }
+                Err(e) => {
+                    self.reports.dump = None;
+                    return self.say(sink, |o| {
+                        push_str(o, crate::control::protocol::ERR)?;
+                        push_str(o, "log cut short: ")?;
+                        push_str(o, super::settings::flash_error(e))
+                    });
+                }
             };
             self.out.clear();
             if format_row(&row, &mut self.out).is_ok() {
                 sink.write_line(&self.out);
             }
-            self.reports.dump_next = Some(i.saturating_add(1));
+            self.reports.dump = Some(Dump { next: dump.next.saturating_add(1), ..dump });
         }
     }
 

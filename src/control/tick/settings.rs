@@ -15,6 +15,7 @@ use crate::control::protocol::field::q8_to_centi;
 use crate::control::protocol::number::{push_fixed, push_fixed_parts, push_hex, push_str, push_u32, TextOut};
 use crate::control::protocol::response::format_calibration_values;
 use crate::control::protocol::{Overflow, Response};
+use crate::control::log::RowLog;
 use crate::control::settings::{FlashError, Refusal, Settings, SettingsStore};
 use crate::driver::MagCalibrate;
 
@@ -66,7 +67,7 @@ impl Sources {
 /// The answer to a changed setting (`trim`, a good `cal`, `mission add|clear`).
 pub(super) const NOT_SAVED: &str = "not saved: save to keep it";
 
-fn flash_error(e: FlashError) -> &'static str {
+pub(super) fn flash_error(e: FlashError) -> &'static str {
     match e {
         FlashError::Error => "flash error",
         FlashError::Timeout => "flash timeout",
@@ -210,6 +211,37 @@ impl<H: Hardware> Controller<H> {
             Err(e) => self.say(sink, |o| {
                 push_str(o, crate::control::protocol::ERR)?;
                 push_str(o, "not forgotten: ")?;
+                push_str(o, flash_error(e))
+            }),
+        }
+    }
+
+    /// At a mission's end, once the robot stands: the on-board log kept in
+    /// flash (a power-off then keeps it for `dump`). The erase and write
+    /// pause the loop (`push_pause`); the wheels are stopped by then.
+    pub(super) fn keep_log(&mut self, sink: &mut impl LineSink) {
+        let standing = matches!(self.mode, Mode::Idle) && self.missions.run.is_none() && self.applied.motion == crate::model::Motion::Stop;
+        if !self.missions.log_unkept || !standing {
+            return;
+        }
+        self.missions.log_unkept = false;
+        if self.log.is_empty() {
+            return; // nothing to keep (the log's rate was 0)
+        }
+        let rows = self.log.len() as u32; // <= config::log::ROWS
+        match self.settings.keep_log(&self.log, self.reports.logging.hz) {
+            Ok(kept) => self.say(sink, |o| {
+                push_str(o, "# kept the log in flash: ")?;
+                push_u32(o, rows)?;
+                push_str(o, " rows, log ")?;
+                push_u32(o, kept.sequence)?;
+                push_str(o, " at ")?;
+                push_hex(o, kept.sector)?;
+                push_pause(o, kept.pause_us)
+            }),
+            Err(e) => self.say(sink, |o| {
+                push_str(o, crate::control::protocol::ERR)?;
+                push_str(o, "log not kept in flash: ")?;
                 push_str(o, flash_error(e))
             }),
         }

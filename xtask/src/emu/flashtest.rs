@@ -4,7 +4,9 @@
 //! that restores it; a power cut between the erase and the write, and one
 //! mid-write, that keep the older record; a damaged record that gives the
 //! config and says so; and the servo pulses, period and width, while the
-//! flash is erased and written (the loop paused, the cache off).
+//! flash is erased and written (the loop paused, the cache off). Then the
+//! on-board log: kept in its slot when a mission ends, and sent by `dump`
+//! after a power-cycle.
 //!
 //! Every run works on its own copy of the flash file (`flash-*.bin` in the
 //! work folder), the firmware image plus what the runs before it wrote.
@@ -17,6 +19,9 @@ use super::selftest::{boot, check_pulses, Expect, Report, Run};
 const MS: u64 = 1_000_000;
 /// The settings sectors (src/config/settings.rs: 0x3F9000, 0x3FA000).
 const SECTOR_A: usize = 0x3F_9000;
+/// The log's first slot (src/config/settings.rs: 0x3F3000, three sectors).
+const LOG_SLOT_A: u32 = 0x3F_3000;
+const LOG_SLOT_BYTES: u32 = 0x3000;
 /// The trims the test saves, as `settings` prints them.
 const SAVED: &str = "# trims (flash): left 1.50 right 0.00";
 
@@ -31,6 +36,20 @@ fn line<'a>(uart: &'a str, prefix: &str) -> Option<&'a str> {
 
 fn shown(l: Option<&str>) -> String {
     l.map_or("missing".to_string(), |l| format!("'{l}'"))
+}
+
+/// The erase and program commands of the run outside `[from, from + len)`.
+fn written_outside(run: &Run, from: u32, len: u32) -> Vec<&String> {
+    run.events
+        .others
+        .iter()
+        .filter(|(_, e)| e.starts_with("flash-erase") || e.starts_with("flash-program"))
+        .map(|(_, e)| e)
+        .filter(|e| {
+            let addr = e.split(' ').nth(1).and_then(|a| u32::from_str_radix(a.trim_start_matches("0x"), 16).ok());
+            !addr.is_some_and(|a| (from..from + len).contains(&a))
+        })
+        .collect()
 }
 
 /// When the run logged `event` (its first word) first and last, ns.
@@ -60,17 +79,7 @@ pub(super) fn run(r: &mut Report, board: &Board, work: &Path, image: &Path, e: &
             run.events.others.iter().filter(|(_, e)| e.starts_with("flash-program")).count()
         }),
     );
-    let outside: Vec<&String> = run
-        .events
-        .others
-        .iter()
-        .filter(|(_, e)| e.starts_with("flash-erase") || e.starts_with("flash-program"))
-        .map(|(_, e)| e)
-        .filter(|e| {
-            let addr = e.split(' ').nth(1).and_then(|a| u32::from_str_radix(a.trim_start_matches("0x"), 16).ok());
-            !addr.is_some_and(|a| (SECTOR_A as u32..SECTOR_A as u32 + 0x2000).contains(&a))
-        })
-        .collect();
+    let outside = written_outside(&run, SECTOR_A as u32, 0x2000);
     r.check(
         "flash: every erase and program inside the two settings sectors",
         outside.is_empty(),
@@ -149,6 +158,38 @@ pub(super) fn run(r: &mut Report, board: &Board, work: &Path, image: &Path, e: &
         "flash: a damaged record is ignored, the config used",
         ignored.is_some() && config.is_some() && trims == Some("# trims (config): left 0.00 right 0.00"),
         format!("{}, {}, {}", shown(ignored), shown(config), shown(trims)),
+    );
+    Ok(())
+}
+
+/// A mission's log kept in flash at its end, then sent by `dump` after a
+/// power-cycle.
+pub(super) fn kept_log(r: &mut Report, board: &Board, work: &Path, image: &Path, e: &Expect) -> Result<(), String> {
+    let flash = work.join("flash-log.bin");
+    copy(image, &flash)?;
+    let mission = ["mission add wait 0.5", "log 10", "mission start"];
+    let run = boot(board, work, "flash-log", &flash, &mission, 13.0, &e.banner, "")?;
+    let uart = &run.output.uart;
+    let kept = line(uart, "# kept the log in flash: ");
+    let rows: Option<usize> =
+        kept.and_then(|l| l.trim_start_matches("# kept the log in flash: ").split(' ').next()?.parse().ok());
+    let outside = written_outside(&run, LOG_SLOT_A, LOG_SLOT_BYTES);
+    r.check(
+        "flash: a mission's end keeps its log in the log's slot",
+        kept.is_some_and(|l| l.contains(" rows, log 1 at 0x3f3000, paused ")) && rows.is_some() && outside.is_empty(),
+        format!("{}{}", shown(kept), if outside.is_empty() { String::new() } else { format!("; outside: {outside:?}") }),
+    );
+    let run = boot(board, work, "flash-log-dump", &flash, &["dump"], 2.0, &e.banner, "")?;
+    let uart = &run.output.uart;
+    let summary = line(uart, "# log ");
+    // the rows between the summary and its end (telemetry runs before)
+    let dumped = uart.lines().map(|l| l.trim_end_matches('\r')).skip_while(|l| !l.starts_with("# log ")).skip(1);
+    let sent = dumped.take_while(|l| *l != "# log end").filter(|l| l.starts_with(|c: char| c.is_ascii_digit())).count();
+    let want = rows.map(|n| format!("# log {n} rows at 10 Hz, 0 dropped (oldest first), kept in flash, log 1"));
+    r.check(
+        "flash: after a power-cycle dump sends the kept log",
+        want.is_some() && summary == want.as_deref() && Some(sent) == rows && line(uart, "# log end").is_some(),
+        format!("{}, {sent} rows", shown(summary)),
     );
     Ok(())
 }

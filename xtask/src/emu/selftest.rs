@@ -320,6 +320,7 @@ pub fn run(root: &Path, board: &Board, work: &Path, boot_bin: &Path, irom_bin: &
     deadman(&mut report, board, work, &flash, &expect)?;
     stop(&mut report, board, work, &flash, &expect)?;
     super::flashtest::run(&mut report, board, work, &flash, &expect)?;
+    super::flashtest::kept_log(&mut report, board, work, &flash, &expect)?;
     watchdog(&mut report, root, board, work)?;
     super::strict::run(&mut report, root, board, work, &expect)?;
     println!("{} passed, {} failed", report.passed, report.failed);
