@@ -163,12 +163,13 @@ pub(super) fn run(r: &mut Report, board: &Board, work: &Path, image: &Path, e: &
 }
 
 /// A mission's log kept in flash at its end, then sent by `dump` after a
-/// power-cycle.
+/// power-cycle: a full log (100 Hz for 2.5 s: the ring's 200 rows, 50
+/// dropped), so the pause reported is the longest a keep takes.
 pub(super) fn kept_log(r: &mut Report, board: &Board, work: &Path, image: &Path, e: &Expect) -> Result<(), String> {
     let flash = work.join("flash-log.bin");
     copy(image, &flash)?;
-    let mission = ["mission add wait 0.5", "log 10", "mission start"];
-    let run = boot(board, work, "flash-log", &flash, &mission, 13.0, &e.banner, "")?;
+    let mission = ["mission add wait 2.5", "log 100", "mission start"];
+    let run = boot(board, work, "flash-log", &flash, &mission, 14.0, &e.banner, "")?;
     let uart = &run.output.uart;
     let kept = line(uart, "# kept the log in flash: ");
     let rows: Option<usize> =
@@ -179,16 +180,22 @@ pub(super) fn kept_log(r: &mut Report, board: &Board, work: &Path, image: &Path,
         kept.is_some_and(|l| l.contains(" rows, log 1 at 0x3f3000, paused ")) && rows.is_some() && outside.is_empty(),
         format!("{}{}", shown(kept), if outside.is_empty() { String::new() } else { format!("; outside: {outside:?}") }),
     );
-    let run = boot(board, work, "flash-log-dump", &flash, &["dump"], 2.0, &e.banner, "")?;
+    let run = boot(board, work, "flash-log-dump", &flash, &["dump"], 3.5, &e.banner, "")?;
     let uart = &run.output.uart;
     let summary = line(uart, "# log ");
     // the rows between the summary and its end (telemetry runs before)
     let dumped = uart.lines().map(|l| l.trim_end_matches('\r')).skip_while(|l| !l.starts_with("# log ")).skip(1);
     let sent = dumped.take_while(|l| *l != "# log end").filter(|l| l.starts_with(|c: char| c.is_ascii_digit())).count();
-    let want = rows.map(|n| format!("# log {n} rows at 10 Hz, 0 dropped (oldest first), kept in flash, log 1"));
+    // 2.5 s at 100 Hz: about 250 rows pushed, the newest 200 kept
+    let dropped = |l: &str| -> Option<u32> {
+        let rest = l.strip_prefix(&format!("# log {} rows at 100 Hz, ", rows?))?;
+        rest.strip_suffix(" dropped (oldest first), kept in flash, log 1")?.parse().ok()
+    };
     r.check(
         "flash: after a power-cycle dump sends the kept log",
-        want.is_some() && summary == want.as_deref() && Some(sent) == rows && line(uart, "# log end").is_some(),
+        summary.and_then(dropped).is_some_and(|d| (45..=55).contains(&d))
+            && Some(sent) == rows
+            && line(uart, "# log end").is_some(),
         format!("{}, {sent} rows", shown(summary)),
     );
     Ok(())
