@@ -35,10 +35,8 @@ pub const SECTORS: [u32; 2] = [SDK_DATA_START - 2 * SECTOR_BYTES, SDK_DATA_START
 pub const LOG_SLOT_SECTORS: u32 = 3;
 /// The two slots the on-board log is kept in by turns at a mission's end,
 /// just below the settings sectors.
-pub const LOG_SLOTS: [u32; 2] = [
-    SECTORS[0] - 2 * LOG_SLOT_SECTORS * SECTOR_BYTES,
-    SECTORS[0] - LOG_SLOT_SECTORS * SECTOR_BYTES,
-];
+pub const LOG_SLOTS: [u32; 2] =
+    [SECTORS[0] - 2 * LOG_SLOT_SECTORS * SECTOR_BYTES, SECTORS[0] - LOG_SLOT_SECTORS * SECTOR_BYTES];
 /// The lowest sector this firmware writes (the image must end before it).
 pub const FIRST_SECTOR: u32 = LOG_SLOTS[0];
 /// The record's format version: a record of another version is ignored

@@ -177,7 +177,10 @@ fn a_missions_log_is_kept_and_dumped_after_a_power_cycle() {
     let kept = lines.last().unwrap();
     let held = r.controller().log().len();
     assert!(held >= 14, "{held} rows");
-    assert!(kept.starts_with(&format!("# kept the log in flash: {held} rows, log 1 at 0x3f3000, paused ")), "{lines:?}");
+    assert!(
+        kept.starts_with(&format!("# kept the log in flash: {held} rows, log 1 at 0x3f3000, paused ")),
+        "{lines:?}"
+    );
     let done = lines.iter().position(|l| l.starts_with("# mission done")).unwrap();
     assert_eq!(done + 1, lines.len() - 1, "kept right after the mission: {lines:?}");
     let (notes, in_ram) = dump(&mut r);

@@ -542,7 +542,9 @@ mod tests {
     #[test]
     fn the_image_must_end_before_the_logs_and_the_settings_sectors() {
         let ok = check_flash_end(0x2_0000).unwrap();
-        assert!(ok.contains("before the log's slots 0x3f3000 and 0x3f6000 and the settings sectors 0x3f9000 and 0x3fa000"));
+        assert!(
+            ok.contains("before the log's slots 0x3f3000 and 0x3f6000 and the settings sectors 0x3f9000 and 0x3fa000")
+        );
         assert!(check_flash_end(0x3F_3000).is_ok());
         assert!(check_flash_end(0x3F_3001).unwrap_err().contains("over the log's and settings' sectors from 0x3f3000"));
     }

@@ -12,7 +12,7 @@
 //! keeps the older log.
 //!
 //! Nothing here holds the log twice: the rows go from the RAM ring to the
-//! flash through a stack buffer of [`ROWS_PER_WRITE`] rows (240 bytes,
+//! flash through a stack buffer of `ROWS_PER_WRITE` rows (240 bytes,
 //! within one 256-byte flash page program), and are read back one at a
 //! time.
 

@@ -9,9 +9,9 @@ use super::{Controller, Hardware, LineSink};
 use crate::config;
 use crate::control::log::RowLog;
 use crate::control::protocol::number::{push_hex, push_str, push_u32};
+use crate::control::protocol::{format_row, format_telemetry, telemetry_header, Telemetry, TelemetryRow};
 use crate::control::settings::kept_log::KeptLog;
 use crate::control::settings::{Refusal, SettingsStore};
-use crate::control::protocol::{format_row, format_telemetry, telemetry_header, Telemetry, TelemetryRow};
 use crate::math::div_u64;
 
 /// Rows at a rate: telemetry's, or the on-board log's.

@@ -11,11 +11,11 @@
 
 use super::{Controller, Hardware, LineSink, Mode};
 use crate::config;
+use crate::control::log::RowLog;
 use crate::control::protocol::field::q8_to_centi;
 use crate::control::protocol::number::{push_fixed, push_fixed_parts, push_hex, push_str, push_u32, TextOut};
 use crate::control::protocol::response::format_calibration_values;
 use crate::control::protocol::{Overflow, Response};
-use crate::control::log::RowLog;
 use crate::control::settings::{FlashError, Refusal, Settings, SettingsStore};
 use crate::driver::MagCalibrate;
 
@@ -220,7 +220,9 @@ impl<H: Hardware> Controller<H> {
     /// flash (a power-off then keeps it for `dump`). The erase and write
     /// pause the loop (`push_pause`); the wheels are stopped by then.
     pub(super) fn keep_log(&mut self, sink: &mut impl LineSink) {
-        let standing = matches!(self.mode, Mode::Idle) && self.missions.run.is_none() && self.applied.motion == crate::model::Motion::Stop;
+        let standing = matches!(self.mode, Mode::Idle)
+            && self.missions.run.is_none()
+            && self.applied.motion == crate::model::Motion::Stop;
         if !self.missions.log_unkept || !standing {
             return;
         }

@@ -178,7 +178,11 @@ pub(super) fn kept_log(r: &mut Report, board: &Board, work: &Path, image: &Path,
     r.check(
         "flash: a mission's end keeps its log in the log's slot",
         kept.is_some_and(|l| l.contains(" rows, log 1 at 0x3f3000, paused ")) && rows.is_some() && outside.is_empty(),
-        format!("{}{}", shown(kept), if outside.is_empty() { String::new() } else { format!("; outside: {outside:?}") }),
+        format!(
+            "{}{}",
+            shown(kept),
+            if outside.is_empty() { String::new() } else { format!("; outside: {outside:?}") }
+        ),
     );
     let run = boot(board, work, "flash-log-dump", &flash, &["dump"], 3.5, &e.banner, "")?;
     let uart = &run.output.uart;
