@@ -110,8 +110,10 @@ pub mod replay;
 
 mod constants;
 mod covariance;
+mod light;
 mod outcome;
 mod predict;
+mod report;
 mod tracker;
 mod update;
 
@@ -179,9 +181,16 @@ pub struct Estimator {
     hyps: [Filter; cfg::MAX_HYPOTHESES],
     /// Each hypothesis's cost, Q8 (the best's is 0 after every correction).
     costs: [i32; cfg::MAX_HYPOTHESES],
+    /// Each hypothesis's id: a number given when it is seeded or spawned
+    /// (counting up, wrapping), kept while it lives (for a replay's picture).
+    ids: [u8; cfg::MAX_HYPOTHESES],
+    next_id: u8,
     /// `hyps[..live]` are live (at least one).
     live: usize,
+    /// The leader: the whole filter; the others are lighter (`light`).
     best: usize,
+    /// The secondary that weighed the last reading (they take turns).
+    turn: u8,
     /// One hypothesis leads all others by [`cfg::DOMINATE_COST`].
     dominant: bool,
     tracking: Tracking,
@@ -227,8 +236,11 @@ impl Estimator {
         let mut est = Estimator {
             hyps: [filter; cfg::MAX_HYPOTHESES],
             costs: [0; cfg::MAX_HYPOTHESES],
+            ids: [0; cfg::MAX_HYPOTHESES],
+            next_id: 0,
             live: 1,
             best: 0,
+            turn: 0,
             dominant: true,
             tracking: Tracking::Unknown,
             reported: initial,
@@ -321,8 +333,11 @@ impl Estimator {
     }
 
     fn start(&mut self, hyps: &[(Filter, i32)], tracking: Tracking) {
-        for ((h, c), (f, cost)) in self.hyps.iter_mut().zip(self.costs.iter_mut()).zip(hyps.iter()) {
-            (*h, *c) = (*f, *cost);
+        for (((h, c), id), (f, cost)) in
+            self.hyps.iter_mut().zip(self.costs.iter_mut()).zip(self.ids.iter_mut()).zip(hyps.iter())
+        {
+            (*h, *c, *id) = (*f, *cost, self.next_id);
+            self.next_id = self.next_id.wrapping_add(1);
         }
         self.live = hyps.len().clamp(1, cfg::MAX_HYPOTHESES);
         self.tracking = tracking;
@@ -396,6 +411,13 @@ impl Estimator {
     /// The live hypotheses: pose and cost (Q8, the best's 0).
     pub fn hypotheses(&self) -> impl Iterator<Item = (Pose, i32)> + '_ {
         self.hyps.iter().zip(self.costs.iter()).take(self.live).map(|(h, &c)| (h.pose, c))
+    }
+
+    /// The id of the hypothesis the reported pose follows (the best; see
+    /// [`Estimator::hypotheses`]): given when it was seeded or spawned,
+    /// kept while it lives.
+    pub fn best_id(&self) -> u8 {
+        self.ids.get(self.best).copied().unwrap_or(0)
     }
 
     /// One-sigma uncertainties of the best hypothesis in mm and as an angle
