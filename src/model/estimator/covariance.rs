@@ -134,7 +134,12 @@ impl Covariance {
                 let pak = self.upper.get(ra).copied().unwrap_or(0);
                 let pbk = self.upper.get(rb).copied().unwrap_or(0);
                 if let Some(e) = self.upper.get_mut(ri) {
-                    *e = e.saturating_add(mul_q30_fine(pak, fa)).saturating_add(mul_q30_fine(pbk, fb));
+                    *e = e.saturating_add(mul_q30_fine(pak, fa));
+                    // tick bar: a turn's heading shear has one factor (a
+                    // product by 0 is 0)
+                    if fb != 0 {
+                        *e = e.saturating_add(mul_q30_fine(pbk, fb));
+                    }
                 }
             }
             ri += step(k, i);

@@ -232,6 +232,9 @@ impl Covariance {
     /// e_t^T` (`f` in Q30, `|f| <= 2^29`): the position moves by `f` times
     /// the heading. The pose block's entries only (a secondary's).
     pub(super) fn shear_pose(&mut self, f1: i32, f2: i32) {
+        if f1 == 0 && f2 == 0 {
+            return;
+        }
         let (f1, f2) = (f1.clamp(-(1 << 29), 1 << 29), f2.clamp(-(1 << 29), 1 << 29));
         let (xt, yt, tt) = (self.get(X, T), self.get(Y, T), self.get(T, T));
         let fine = super::covariance::mul_q30_fine;
