@@ -62,14 +62,16 @@ impl Shared {
             }
             (Motion::Turn(w0), Motion::Turn(w)) => {
                 let turned = (w.rotation(dt).0 .0 as i32).saturating_abs();
-                let var = mul_hi(turned, K_TURN);
-                // the turned angle's noise reaches the position by D / L
                 let scale = if w0.to_bits() >= 0 { CW } else { CCW };
-                // |turned| Lc_rad in Q27 (below 1/2 for a step's 1.3 rad)
+                // |turned| Lc_rad in Q27 (below 4 for a step's 1.3 rad)
                 let share = mul_hi(turned, TURN_SHARE_Q27);
                 let from_scale = mul_hi(f.p.get(scale, scale), share) << 5;
+                // the turned angle's noise and the scale's: the heading's,
+                // and the position's by D / L (the reference point swings
+                // about the pivot), with the pivot's slop
+                let var = mul_hi(turned, K_TURN).saturating_add(from_scale);
                 let pos = mul_q30(var, D_OVER_L_SQ_Q30).saturating_add(mul_hi(turned, K_PIVOT));
-                (pos, var.saturating_add(from_scale))
+                (pos, var)
             }
             _ => (0, 0),
         };
@@ -295,5 +297,97 @@ impl Covariance {
         let repairs = super::covariance::bound_correlation(&mut pij, self.get(i, i), self.get(j, j));
         self.set(i, j, pij);
         repairs
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::restriction)] // test code: a panic fails the test
+mod tests {
+    use super::*;
+    use crate::math::{Speed, TurnRate};
+    use crate::model::state::Pose;
+
+    const BOUNDS: Bounds = Bounds { low_mm: -1000, high_x_mm: 2000, high_y_mm: 2000 };
+
+    /// The pose block's shear is `M P M^T` (f64, to the products' rounding).
+    #[test]
+    fn the_pose_shear_is_the_congruence() {
+        let mut p = Covariance::default();
+        for (i, j, v) in
+            [(X, X, 1 << 24), (Y, Y, 1 << 23), (T, T, 1 << 22), (X, Y, -(1 << 21)), (X, T, 1 << 21), (Y, T, -(1 << 20))]
+        {
+            p.set(i, j, v);
+        }
+        let (f1, f2) = (-(3 << 27), 5 << 26); // -0.375, 0.3125
+        let mut q = p;
+        q.shear_pose(f1, f2);
+        let (g1, g2) = (f64::from(f1) / f64::from(1 << 30), f64::from(f2) / f64::from(1 << 30));
+        let m = |a: usize, b: usize| match (a, b) {
+            _ if a == b => 1.0,
+            (X, T) => g1,
+            (Y, T) => g2,
+            _ => 0.0,
+        };
+        for i in [X, Y, T] {
+            for j in [X, Y, T] {
+                let mut e = 0.0;
+                for a in [X, Y, T] {
+                    for b in [X, Y, T] {
+                        e += m(i, a) * f64::from(p.get(a, b)) * m(j, b);
+                    }
+                }
+                assert!((f64::from(q.get(i, j)) - e).abs() <= 32.0, "{i} {j}: {} vs {e}", q.get(i, j));
+            }
+        }
+    }
+
+    /// A secondary's pose block, predicted step by step as owed and paid
+    /// once, against the whole filter's over the same motion: a quarter
+    /// turn each way and 450 mm straight (the config's correlation angle and
+    /// distance, where its scale noise is exact) from an uncertain start.
+    /// Its variances are never below the whole filter's (it must not be
+    /// surer than it is: it would refuse the readings that save it) and at
+    /// most 2.5 times (1.0-2.3 now: its noise on both axes).
+    #[test]
+    fn a_secondary_is_about_as_uncertain_as_a_whole_filter() {
+        let start = |p: Pose| {
+            let mut f = Filter::new(p);
+            f.p = Covariance::diagonal_of([
+                400 * 4096,
+                900 * 4096,
+                super::super::constants::R_COMPASS,
+                f.p.get(SPEED, SPEED),
+                f.p.get(CW, CW),
+                f.p.get(CCW, CCW),
+                f.p.get(BIAS, BIAS),
+            ]);
+            f
+        };
+        let dt = Dt::from_micros_saturating(10_000);
+        let quarter = (0.5 * core::f64::consts::PI / 2.5 / 0.01) as usize; // 2.5 rad/s
+        let straight = (450.0 / 130.0 / 0.01) as usize; // 130 mm/s
+        for (motion, steps) in [
+            (Motion::Turn(TurnRate::from_mrad_s(2500)), quarter),
+            (Motion::Turn(TurnRate::from_mrad_s(-2500)), quarter),
+            (Motion::Straight(Speed::from_mm_s(130)), straight),
+        ] {
+            let mut whole = start(Pose::from_mm(380, 250, Angle::from_millidegrees(30_000)));
+            let mut light = whole;
+            for _ in 0..steps {
+                let scaled = whole.scales.apply(motion);
+                let shared = Shared::of(&whole, motion, scaled, dt);
+                light.predict_pose(&shared, dt, &BOUNDS);
+                whole.predict(motion, scaled, dt, &BOUNDS);
+            }
+            light.pay();
+            assert_eq!(light.pose, whole.pose, "{motion:?}: the same scaled motion");
+            for i in [X, Y, T] {
+                let ratio = f64::from(light.p.get(i, i)) / f64::from(whole.p.get(i, i));
+                assert!(
+                    (0.99..=2.5).contains(&ratio),
+                    "{motion:?}: state {i}: {ratio:.3} of the whole filter's variance"
+                );
+            }
+        }
     }
 }
