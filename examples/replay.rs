@@ -12,7 +12,10 @@
 //! (see `paperbot::model::estimator::replay`). Writes `t_ms,x_mm,y_mm,theta_deg`
 //! to stdout and the estimated path as SVG, with each lidar reading drawn
 //! from the lidar to where its beam ended (the model's distance along the
-//! beam from the estimated pose): blue the front lidar, green the right. The
+//! beam from the estimated pose): blue the front lidar, green the right; the
+//! path is coloured by the hypothesis the estimator reported (a legend row
+//! per id: an id is given when a hypothesis is seeded or spawned) and dashed
+//! where it was not located (ambiguous or unknown). The
 //! options take the same syntax as `simulate`'s. Its closing lines say how
 //! the estimate agrees with the readings (`paperbot::host::replay_stats`):
 //! each lidar's share of readings accepted and mean normalised innovation,
@@ -25,10 +28,11 @@
 use paperbot::host::{args, replay_stats};
 use paperbot::math::{Angle, Coord};
 use paperbot::model::estimator::replay;
+use paperbot::model::estimator::Tracking;
 use paperbot::model::measurement::Arena;
 use paperbot::model::Pose;
 use paperbot::sim::body::PoseF64;
-use paperbot::sim::svg::{render_with_rays, Ray, Track};
+use paperbot::sim::svg::{render_with_stretches, Ray, Stretch, Track};
 use std::process::ExitCode;
 
 fn usage() -> String {
@@ -111,9 +115,10 @@ fn run(a: Args) -> Result<(), String> {
     let name = std::path::Path::new(&a.log).file_name().map_or(a.log.clone(), |n| n.to_string_lossy().into_owned());
     let title = format!("paperbot replay of {name}: {} rows, {seconds:.1} s", samples.len());
     let track =
-        Track { label: "firmware estimate from the recorded readings", color: "#d62728", dashed: false, poses: &poses };
+        Track { label: "firmware estimate from the recorded readings", color: "#444444", dashed: false, poses: &poses };
     let rays = lidar_rays(&samples, &estimates);
-    let svg = render_with_rays(&arena, &[track], &rays, &title);
+    let stretches = reported_stretches(&estimates, &poses);
+    let svg = render_with_stretches(&arena, &[track], &stretches, &rays, &title);
     std::fs::write(&a.out, svg).map_err(|e| format!("{}: {e}", a.out))?;
     let sensor = |name: &str, s: &paperbot::model::estimator::SensorStats| {
         format!("{name} {} accepted, {} outliers, {} unusable", s.accepted, s.outliers, s.unusable)
@@ -163,6 +168,41 @@ fn lidar_rays<'a>(samples: &[replay::Sample], estimates: &[replay::Estimate]) ->
         }
     }
     rays
+}
+
+/// Colours of the reported hypotheses, by id (not the lidars' blue and green).
+const HYPOTHESIS_COLORS: [&str; 6] = ["#d62728", "#9467bd", "#ff7f0e", "#17becf", "#8c564b", "#e377c2"];
+
+/// The estimated path in stretches by the hypothesis reported (a colour
+/// and a legend row per id), then the stretches not located (ambiguous or
+/// unknown) drawn dashed over them. Each stretch ends on the next one's
+/// first pose, so the path is unbroken.
+fn reported_stretches<'a>(estimates: &[replay::Estimate], poses: &'a [PoseF64]) -> Vec<Stretch<'a>> {
+    let runs = |key: &dyn Fn(&replay::Estimate) -> Option<String>,
+                color: &dyn Fn(&replay::Estimate) -> &'static str| {
+        let mut out = Vec::new();
+        let mut start = 0;
+        for i in 1..=estimates.len() {
+            if i < estimates.len() && key(&estimates[i]) == key(&estimates[start]) {
+                continue;
+            }
+            let e = &estimates[start];
+            if let Some(label) = key(e) {
+                let end = (i + 1).min(poses.len());
+                out.push(Stretch { label, color: color(e), dashed: false, poses: &poses[start..end] });
+            }
+            start = i;
+        }
+        out
+    };
+    let by_id = |e: &replay::Estimate| Some(format!("reported: hypothesis {}", e.hypothesis));
+    let id_color = |e: &replay::Estimate| HYPOTHESIS_COLORS[usize::from(e.hypothesis) % HYPOTHESIS_COLORS.len()];
+    let unlocated = |e: &replay::Estimate| {
+        (e.tracking != Tracking::Located).then(|| "dashed: not located (ambiguous or unknown)".to_string())
+    };
+    let mut stretches = runs(&by_id, &id_color);
+    stretches.extend(runs(&unlocated, &|_| "black").into_iter().map(|s| Stretch { dashed: true, ..s }));
+    stretches
 }
 
 fn main() -> ExitCode {

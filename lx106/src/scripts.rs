@@ -18,7 +18,7 @@ use paperbot::control::{Controller, Hardware, LineSink};
 use paperbot::driver::{CompassSample, HeadingSensor, LidarSample, MagCalibrate, RangeSensor, SensorError, Servos};
 use paperbot::math::{Angle, Dt, Length, Speed, TurnRate};
 use paperbot::model::compass::{MagCalibration, MagCounts, MagField};
-use paperbot::model::estimator::{Estimator, Update, N};
+use paperbot::model::estimator::{Estimator, Seed, Update, N};
 use paperbot::model::measurement::{expected_heading, expected_lidar, Arena, LidarId};
 use paperbot::model::{step, Motion, Pose, ServoCmd};
 
@@ -54,7 +54,8 @@ fn fnv_i64(h: u32, v: i64) -> u32 {
 
 /// The estimator's bits beyond the reported pose: the best hypothesis's
 /// covariance diagonal, and an FNV-1a hash of its whole covariance, pose,
-/// scales and bias, the tracking state and the costs of every hypothesis.
+/// scales and bias, the tracking state, every hypothesis's cost and pose,
+/// and the best's id.
 pub fn cov_array(est: &Estimator) -> [i32; N + 1] {
     let p = est.covariance();
     let mut h = FNV0;
@@ -70,9 +71,12 @@ pub fn cov_array(est: &Estimator) -> [i32; N + 1] {
     }
     h = fnv_i64(h, i64::from(est.compass_bias().0));
     h = fnv(h, &[est.tracking() as u8]);
-    for (_, cost) in est.hypotheses() {
-        h = fnv_i64(h, i64::from(cost));
+    for (pose, cost) in est.hypotheses() {
+        for v in [i64::from(cost), pose.x.0, pose.y.0, i64::from(pose.theta.0)] {
+            h = fnv_i64(h, v);
+        }
     }
+    h = fnv(h, &[est.best_id()]);
     let d = p.diagonal();
     [d[0], d[1], d[2], d[3], d[4], d[5], d[6], h as i32]
 }
@@ -102,11 +106,14 @@ pub fn update_code(u: Option<Update>) -> u8 {
 pub struct EstRec(pub u8, pub u8, pub i32, pub i64, pub i64, pub u32, pub u16, pub [i32; N + 1]);
 
 /// One scripted run: start pose of the truth (mm, mm, deg), the estimator's
-/// initial error (mm, mm, deg), motion segments (motion, ticks) and the seed.
+/// initial error (mm, mm, deg), more hypotheses seeded beside it (offsets
+/// from the truth, mm, mm, deg: none for a typed start), motion segments
+/// (motion, ticks) and the seed.
 pub struct EstRun {
     pub name: &'static str,
     pub truth: (i32, i32, i32),
     pub error: (i32, i32, i32),
+    pub others: &'static [(i32, i32, i32)],
     pub segments: &'static [(Mv, u16)],
     pub seed: u32,
 }
@@ -143,6 +150,7 @@ pub const EST_RUNS: &[EstRun] = &[
         name: "drive_turn_drive",
         truth: (380, 250, 0),
         error: (25, -15, 4),
+        others: &[],
         segments: &[
             (Mv::Straight(130), 60),
             (Mv::Turn(2500), 40),
@@ -156,8 +164,19 @@ pub const EST_RUNS: &[EstRun] = &[
         name: "corner_and_walls",
         truth: (150, 120, 225),
         error: (-30, 20, -6),
+        others: &[],
         segments: &[(Mv::Turn(-3000), 35), (Mv::Straight(140), 45), (Mv::Turn(2800), 25), (Mv::Straight(-100), 40)],
         seed: 0x0bad_cafe,
+    },
+    // four seeds (a localization's clusters): the leader's whole filter and
+    // three lighter ones, weighed in turn, until the truth's dominates
+    EstRun {
+        name: "four_seeds",
+        truth: (380, 250, 30),
+        error: (8, -5, 2),
+        others: &[(120, -60, 0), (-150, 40, 10), (60, 120, -20)],
+        segments: &[(Mv::Straight(130), 50), (Mv::Turn(2500), 30), (Mv::Straight(-100), 40), (Mv::Turn(-2000), 20)],
+        seed: 0x5eed_0004,
     },
 ];
 
@@ -172,7 +191,17 @@ pub fn run_estimator(run: &EstRun, mut rec: impl FnMut(EstRec)) {
     let (tx, ty, tt) = run.truth;
     let (ex, ey, et) = run.error;
     let mut truth = Pose::from_mm(tx, ty, deg(tt));
-    let mut est = Estimator::new(Pose::from_mm(tx + ex, ty + ey, deg(tt + et)));
+    let start = Pose::from_mm(tx + ex, ty + ey, deg(tt + et));
+    let mut est = Estimator::new(start);
+    if !run.others.is_empty() {
+        let sigma = Length::from_mm(20);
+        let seed = |pose| Seed { pose, sigma_x: sigma, sigma_y: sigma, weight: 1 };
+        let mut seeds = [seed(start); 4];
+        for (s, &(dx, dy, dt)) in seeds.iter_mut().skip(1).zip(run.others) {
+            *s = seed(Pose::from_mm(tx + dx, ty + dy, deg(tt + dt)));
+        }
+        est.seed(seeds.get(..=run.others.len()).unwrap_or(&seeds));
+    }
     let record = |kind: u8, u: Option<Update>, exp: i32, est: &Estimator, rec: &mut dyn FnMut(EstRec)| {
         let p = est.pose();
         rec(EstRec(kind, update_code(u), exp, p.x.0, p.y.0, p.theta.0, p.theta_frac, cov_array(est)))

@@ -17,6 +17,17 @@ pub struct Track<'a> {
     pub poses: &'a [PoseF64],
 }
 
+/// A stretch of a path drawn over the tracks, without start or end marks:
+/// what a replay reported when (a colour per hypothesis). Stretches of one
+/// label share one legend row.
+pub struct Stretch<'a> {
+    pub label: String,
+    /// CSS colour.
+    pub color: &'a str,
+    pub dashed: bool,
+    pub poses: &'a [PoseF64],
+}
+
 const MARGIN: f64 = 40.0;
 const LEGEND_ROW: f64 = 18.0;
 /// The widest a character of the 12 px sans-serif text runs, px (0.62 em:
@@ -54,11 +65,31 @@ pub fn render(arena: &Arena, tracks: &[Track<'_>], title: &str) -> String {
 
 /// [`render`] with lidar readings drawn under the tracks.
 pub fn render_with_rays(arena: &Arena, tracks: &[Track<'_>], rays: &[Ray<'_>], title: &str) -> String {
-    let rows = tracks.len() + 1 + usize::from(!rays.is_empty());
+    render_with_stretches(arena, tracks, &[], rays, title)
+}
+
+/// [`render_with_rays`] with stretches drawn over the tracks, a legend row
+/// per label (the legend is inside the picture, below the arena).
+pub fn render_with_stretches(
+    arena: &Arena,
+    tracks: &[Track<'_>],
+    stretches: &[Stretch<'_>],
+    rays: &[Ray<'_>],
+    title: &str,
+) -> String {
+    // a legend row per label, in order of first appearance
+    let mut labels: std::vec::Vec<&Stretch<'_>> = std::vec::Vec::new();
+    for st in stretches {
+        if !labels.iter().any(|l| l.label == st.label) {
+            labels.push(st);
+        }
+    }
+    let rows = tracks.len() + labels.len() + 1 + usize::from(!rays.is_empty());
     let legend_h = LEGEND_ROW * rows as f64;
     // wide enough for the box and for every line of text (title, legend)
     let room = |x: f64, text: &str| x + CHAR_PX * text.chars().count() as f64 + MARGIN;
-    let texts = tracks.iter().map(|t| room(LEGEND_TEXT_X, t.label));
+    let texts =
+        tracks.iter().map(|t| room(LEGEND_TEXT_X, t.label)).chain(labels.iter().map(|l| room(LEGEND_TEXT_X, &l.label)));
     let fixed = [title, RAYS_LEGEND, ENDS_LEGEND, &arena_line(arena)].map(|t| room(MARGIN, t));
     let w = texts.chain(fixed).fold(arena.width_y_mm() + 2.0 * MARGIN, f64::max);
     let h = arena.length_x_mm() + 2.0 * MARGIN + legend_h;
@@ -115,19 +146,36 @@ pub fn render_with_rays(arena: &Arena, tracks: &[Track<'_>], rays: &[Ray<'_>], t
             );
         }
     }
-    let mut ly = MARGIN + arena.length_x_mm() + MARGIN * 0.5 + LEGEND_ROW;
-    for t in tracks {
-        let dash = if t.dashed { r#" stroke-dasharray="6 4""# } else { "" };
+    for st in stretches {
+        let mut pts = String::new();
+        for p in st.poses {
+            let (x, y) = px(p);
+            let _ = write!(pts, "{x:.1},{y:.1} ");
+        }
+        let dash = if st.dashed { r#" stroke-dasharray="3 3""# } else { "" };
         let _ = writeln!(
             s,
-            r#"<line x1="{MARGIN}" y1="{:.1}" x2="{:.1}" y2="{:.1}" stroke="{}" stroke-width="2"{dash}/><text x="{:.1}" y="{:.1}">{}</text>"#,
+            r#"<polyline points="{}" fill="none" stroke="{}" stroke-width="3"{dash}/>"#,
+            pts.trim_end(),
+            st.color
+        );
+    }
+    let mut ly = MARGIN + arena.length_x_mm() + MARGIN * 0.5 + LEGEND_ROW;
+    let rows = tracks.iter().map(|t| (t.label, t.color, t.dashed, "2", "6 4"));
+    for (label, color, dashed, width, pattern) in
+        rows.chain(labels.iter().map(|l| (&*l.label, l.color, l.dashed, "3", "3 3")))
+    {
+        let dash = if dashed { std::format!(r#" stroke-dasharray="{pattern}""#) } else { String::new() };
+        let _ = writeln!(
+            s,
+            r#"<line x1="{MARGIN}" y1="{:.1}" x2="{:.1}" y2="{:.1}" stroke="{}" stroke-width="{width}"{dash}/><text x="{:.1}" y="{:.1}">{}</text>"#,
             ly - 4.0,
             MARGIN + 30.0,
             ly - 4.0,
-            t.color,
+            color,
             LEGEND_TEXT_X,
             ly,
-            escape(t.label)
+            escape(label)
         );
         ly += LEGEND_ROW;
     }

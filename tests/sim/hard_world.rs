@@ -16,7 +16,7 @@
 //!
 //! Measured (lab world): see `lab_world_laps_keep_their_figures`; the hard
 //! world with the multi-hypothesis estimator: docs/simulator.md (median rms
-//! 125.7 mm, 2 runs never located, 16 with collisions; the invariants kept
+//! 97.7 mm, 2 runs never located, 16 with collisions; the invariants kept
 //! by the 18 that located).
 
 use paperbot::config;

@@ -112,6 +112,38 @@ fn replay_takes_simulates_syntax_and_draws_a_labelled_picture() {
     assert!(!svg.exists(), "no SVG for an empty log");
 }
 
+/// The replay's picture colours the path by the hypothesis the estimator
+/// reported, a legend row per id inside the picture, and dashes where it
+/// was not located (issue #29): the sample log (a typed start, no
+/// re-search) is one hypothesis throughout; on drive1 the right lidar
+/// starts a re-search whose hypothesis takes over: a second id.
+#[test]
+fn replay_colours_the_path_by_the_reported_hypothesis() {
+    let legend = |args: &[&str]| -> Vec<String> {
+        let svg = scratch("hypotheses.svg");
+        let out = tool("replay").args(args).arg("--out").arg(&svg).output().unwrap();
+        assert!(out.status.success(), "{}", text(&out.stderr));
+        let picture = std::fs::read_to_string(&svg).unwrap();
+        std::fs::remove_file(&svg).unwrap();
+        legend_fits(&picture);
+        let height: f64 = picture.split(" height=\"").nth(1).unwrap().split('"').next().unwrap().parse().unwrap();
+        let mut rows = Vec::new();
+        for part in picture.split("<text").skip(1) {
+            let y: f64 = part.split(" y=\"").nth(1).unwrap().split('"').next().unwrap().parse().unwrap();
+            assert!(y < height, "a text at y {y}, below the picture's {height} px");
+            rows.push(part.split_once('>').unwrap().1.split("</text>").next().unwrap().to_string());
+        }
+        rows
+    };
+    let ids = |rows: &[String]| rows.iter().filter(|r| r.starts_with("reported: hypothesis ")).count();
+    let sample = legend(&[&data("estimator/replay_sample.csv"), "--start", "153.6,146.5,0"]);
+    assert_eq!(ids(&sample), 1, "{sample:?}");
+    let drive1 = legend(&[&data("lab2/drive1.csv")]);
+    assert_eq!(ids(&drive1), 2, "{drive1:?}");
+    // drive1 starts from an ambiguous fix
+    assert!(drive1.iter().any(|r| r.starts_with("dashed: not located")), "{drive1:?}");
+}
+
 #[test]
 fn arena_and_start_outside_it_are_refused_clearly() {
     for (name, args, want) in [

@@ -82,6 +82,19 @@ pub(super) const SCALE_WALK: u32 = per_us(scale_var(cfg::SCALE_WALK_PER_SQRT_S))
 pub(super) const BIAS_WALK: u32 = per_us(angle_var(1.0) * cfg::COMPASS_BIAS_WALK_DEG2_PER_S);
 /// D / L in Q31 (D < 128 mm by the config's assert, so D / L < 1/2).
 pub(super) const D_OVER_L_Q31: i32 = to_i32(geometry::ROTATION_TO_REFERENCE.0 as f64 / 65536.0 / L * 2_147_483_648.0);
+/// (D / L)^2 in Q30: how much of a turned angle's noise reaches a
+/// secondary hypothesis's position (`light::Shared`).
+pub(super) const D_OVER_L_SQ_Q30: i32 = {
+    let d = geometry::ROTATION_TO_REFERENCE.0 as f64 / 65536.0 / L;
+    to_i32(d * d * 1_073_741_824.0)
+};
+/// A secondary's share of the leader's speed-scale variance per distance
+/// driven: `Lc / L^2` per mm as a factor for `mul_hi(|d| in Q24 mm, .)`
+/// giving Q30 (`Lc / L^2 2^30 2^32 / 2^24`; see `light::Shared`).
+pub(super) const SPEED_SHARE_Q30: i32 = to_i32(cfg::SPEED_CORRELATION_MM / (L * L) * 274_877_906_944.0);
+/// The same for a turn: `Lc` in radians per radian turned, as a factor
+/// for `mul_hi(|angle| in LSB, .)` giving Q27 (`Lc 2 pi 2^27`).
+pub(super) const TURN_SHARE_Q27: i32 = to_i32(cfg::TURN_CORRELATION_DEG * RAD_PER_DEG * TAU * 134_217_728.0);
 pub(super) const P_MAX: i32 = to_i32(cfg::MAX_VARIANCE_MM2 * Q12);
 pub(super) const P_MIN: i32 = to_i32(cfg::MIN_VARIANCE_MM2 * Q12);
 pub(super) const P0_POS: i32 = to_i32(cfg::INITIAL_SIGMA_MM * cfg::INITIAL_SIGMA_MM * Q12);
@@ -141,6 +154,13 @@ const _: () = {
     assert!(LSB_PER_TILDE_MM_Q9 > (1 << 30));
     // D / L < 1/4 (D < 64 mm): a turn's Jacobian entries stay below 1/2
     assert!(D_OVER_L_Q31 >= 0 && D_OVER_L_Q31 < (1 << 29));
+    // the secondaries' shares fit their formats: a step drives at most
+    // 65.5 mm (the speed's share below 1/2 in Q30) and turns at most 1.3
+    // rad (the turn's below 4 in Q27; times a variance below 2^28, << 5
+    // stays below 2^31)
+    assert!(D_OVER_L_SQ_Q30 >= 0 && D_OVER_L_SQ_Q30 < (1 << 30));
+    assert!(SPEED_SHARE_Q30 > 0 && (SPEED_SHARE_Q30 as f64) * 65.6 / 256.0 < (1u32 << 29) as f64);
+    assert!(TURN_SHARE_Q27 > 0 && (TURN_SHARE_Q27 as f64) * 1.4 / TAU < (1u32 << 29) as f64);
     assert!(MIN_NORMAL > (1 << 26) && MIN_NORMAL <= (1 << 30));
     assert!(P_MIN > 0 && P_MIN < P_MAX && P_MAX <= (1 << 28));
     assert!(P0_POS <= P_MAX && P0_HEADING <= P_MAX && P0_SPEED <= P_MAX && P0_TURN <= P_MAX && P0_BIAS <= P_MAX);

@@ -92,24 +92,18 @@ impl Covariance {
     // tick bar: inlined (a returned array is a memset and a memcpy call)
     #[inline(always)]
     pub(super) fn row(&self, r: usize) -> [i32; N] {
-        let mut out = [0; N];
-        let mut idx = r; // index(0, r)
-        for (k, o) in out.iter_mut().enumerate() {
-            *o = self.upper.get(idx).copied().unwrap_or(0);
-            idx += step(k, r);
-        }
-        out
+        each(
+            #[inline(always)]
+            |k| self.get(r, k),
+        )
     }
 
     /// The diagonal, Q12 mm^2.
     pub fn diagonal(&self) -> [i32; N] {
-        let mut d = [0; N];
-        let mut ii = 0;
-        for (i, di) in d.iter_mut().enumerate() {
-            *di = self.upper.get(ii).copied().unwrap_or(0);
-            ii += N - i;
-        }
-        d
+        // tick bar: a literal of constant indices (a filled array is a
+        // memset call)
+        let at = |i: usize| self.get(i, i);
+        [at(X), at(Y), at(T), at(SPEED), at(CW), at(CCW), at(BIAS)]
     }
 
     /// Zeroes row and column `i` but the diagonal (the state is taken as
@@ -140,7 +134,12 @@ impl Covariance {
                 let pak = self.upper.get(ra).copied().unwrap_or(0);
                 let pbk = self.upper.get(rb).copied().unwrap_or(0);
                 if let Some(e) = self.upper.get_mut(ri) {
-                    *e = e.saturating_add(mul_q30_fine(pak, fa)).saturating_add(mul_q30_fine(pbk, fb));
+                    *e = e.saturating_add(mul_q30_fine(pak, fa));
+                    // tick bar: a turn's heading shear has one factor (a
+                    // product by 0 is 0)
+                    if fb != 0 {
+                        *e = e.saturating_add(mul_q30_fine(pbk, fb));
+                    }
                 }
             }
             ri += step(k, i);
@@ -208,7 +207,7 @@ impl Covariance {
     /// Row and column `i` by 1/2 (the diagonal by 1/4): rare, out of line.
     #[cold]
     #[inline(never)]
-    fn halve(&mut self, i: usize) {
+    pub(super) fn halve(&mut self, i: usize) {
         for k in 0..N {
             let v = self.get(i, k);
             self.set(i, k, if k == i { v >> 2 } else { v >> 1 });
@@ -221,21 +220,30 @@ impl Covariance {
     pub(super) fn condition(&mut self) -> u32 {
         self.condition_diagonal();
         let d = self.diagonal();
-        let (mut i, mut j, mut repairs) = (0usize, 0usize, 0u32);
-        for pij in self.upper.iter_mut() {
-            if i != j {
-                let (pii, pjj) = (d.get(i).copied().unwrap_or(P_MIN), d.get(j).copied().unwrap_or(P_MIN));
+        let mut repairs = 0u32;
+        // tick bar: row by row, each row's P_ii at hand (the packed rows:
+        // P_ii, then P_ij for j > i)
+        let mut rest: &mut [i32] = &mut self.upper;
+        for (i, &pii) in d.iter().enumerate() {
+            let Some((_, tail)) = rest.split_first_mut() else { break };
+            let Some((row, next)) = tail.split_at_mut_checked(N - 1 - i) else { break };
+            for (pij, &pjj) in row.iter_mut().zip(d.iter().skip(i + 1)) {
                 repairs += bound_correlation(pij, pii, pjj);
             }
-            j += 1;
-            if j == N {
-                i += 1;
-                j = i;
-            }
+            rest = next;
         }
         repairs
     }
 }
+
+/// An array of the states by its entries, `f(0)` to `f(N - 1)`.
+// tick bar: a literal (`from_fn`, or a zeroed array filled in a loop, is a
+// memset and a memcpy call on the lx106)
+#[inline(always)]
+pub(super) fn each(f: impl Fn(usize) -> i32) -> [i32; N] {
+    [f(X), f(Y), f(T), f(SPEED), f(CW), f(CCW), f(BIAS)]
+}
+const _: () = assert!(N == 7 && X == 0 && Y == 1 && T == 2 && SPEED == 3 && CW == 4 && CCW == 5 && BIAS == 6);
 
 /// How far the packed index of `P_k,r` moves from `k` to `k + 1` (row `r`
 /// read down its column above the diagonal, then along its row).
@@ -260,7 +268,7 @@ fn step(k: usize, r: usize) -> usize {
 // tick bar: inlined, as its five kin (lx106/BENCHMARKS.md, "Control
 // tick")
 #[inline(always)]
-fn mul_q30_fine(a: i32, f: i32) -> i32 {
+pub(super) fn mul_q30_fine(a: i32, f: i32) -> i32 {
     if a.unsigned_abs() < 1 << 23 {
         (mul_hi(a << 8, f) + 32) >> 6
     } else {
@@ -272,7 +280,7 @@ fn mul_q30_fine(a: i32, f: i32) -> i32 {
 /// floored by [`Covariance::condition`]); 1 if it had to change `P_ij`.
 // tick bar: the quick test inline, the rare exact one out of line
 #[inline(always)]
-fn bound_correlation(pij: &mut i32, pii: i32, pjj: i32) -> u32 {
+pub(super) fn bound_correlation(pij: &mut i32, pii: i32, pjj: i32) -> u32 {
     // |P_ij| <= min(P_ii, P_jj) implies P_ij^2 <= P_ii P_jj; so does the
     // same in 32 bits on the top bits, |P_ij| rounded up and the diagonal
     // down: a < (a / 2^15 + 1) 2^15. a <= 2^30 keeps that square below 2^31,

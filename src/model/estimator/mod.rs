@@ -35,11 +35,15 @@
 //! Re-acquisition (ten disagreeing readings in a row: take the sensor's
 //! side) moved a standing robot's estimate by up to 157 mm on what were ten
 //! readings of one view. It is gone (issue 29). Instead:
-//! - Up to [`cfg::MAX_HYPOTHESES`] filters. [`Estimator::seed`] starts them
+//! - Up to [`cfg::MAX_HYPOTHESES`] filters: the best (the leader) the whole
+//!   filter above, the others lighter (`light`: the pose block, the
+//!   leader's scales and bias). [`Estimator::seed`] starts them
 //!   from a localization's clusters (pose, sigma, weight each; never their
-//!   mean). Every reading corrects every hypothesis and adds to its cost
-//!   (its normalised squared innovation, [`cfg::OUTLIER_COST`] when gated
-//!   out) - but only readings that are new evidence: a sensor's reading
+//!   mean). Every reading corrects the leader and one other in turn, and
+//!   moves that one's cost by its normalised squared innovation
+//!   ([`cfg::OUTLIER_COST`] when gated out) minus the leader's: the costs
+//!   are differences from the leader, and a hypothesis that did not see a
+//!   reading keeps its own - but only readings that are new evidence: a sensor's reading
 //!   counts once the robot has moved [`cfg::EVIDENCE_TRAVEL_MM`] since that
 //!   sensor's last counted one, or [`cfg::EVIDENCE_PERIOD_S`] has passed.
 //!   Ten readings of a standing robot are one.
@@ -71,8 +75,8 @@
 //! instructions) per lidar reading; the tick's budget of 15,000 instructions
 //! holds about 40, far too few to cover the box's 0.4 m^2 by 360 degrees
 //! with a useful density, and the DRAM left holds fewer than that at 7 states.
-//! Four Kalman hypotheses cost four corrections and carry what a particle
-//! cloud of thousands would (a Gaussian each).
+//! Four Kalman hypotheses cost two corrections a reading and carry what a
+//! particle cloud of thousands would (a Gaussian each).
 //!
 //! # Numerical safety
 //! - Covariance update `P - K b^T` with `b = P H^T`, `K = b / S`: symmetric
@@ -99,9 +103,9 @@
 //!
 //! # Cost (lx106: no 32x32->64 multiply, no divide)
 //! Per call figures in `lx106/BENCHMARKS.md`, measured by `lx106/run.sh`:
-//! a control tick with one hypothesis about 11,800 instructions (the bar:
-//! 15,000), each further hypothesis about 11,000 more (predict and correct:
-//! four are about 45,000, 5.6 % of the 10 ms tick at 80 MHz).
+//! a control tick with one hypothesis about 10,300 instructions, with four
+//! about 14,900 (the bar for both: 15,000; the three others' predictions
+//! and one's correction, about 4,600).
 
 // host only (std): replays CSV rows whose width is checked first
 #[cfg(feature = "std")]
@@ -110,8 +114,12 @@ pub mod replay;
 
 mod constants;
 mod covariance;
+mod light;
 mod outcome;
 mod predict;
+mod report;
+mod research;
+mod seed;
 mod tracker;
 mod update;
 
@@ -120,7 +128,6 @@ use crate::math::{isqrt, Angle, Dt, Length};
 use crate::model::actuator::Motion;
 use crate::model::measurement::Arena;
 use crate::model::state::Pose;
-use constants::{CATCH_UP_STANDING_Q16, P_MAX, R_COMPASS};
 use predict::{Bounds, Filter};
 
 pub use crate::model::measurement::LidarId;
@@ -179,9 +186,16 @@ pub struct Estimator {
     hyps: [Filter; cfg::MAX_HYPOTHESES],
     /// Each hypothesis's cost, Q8 (the best's is 0 after every correction).
     costs: [i32; cfg::MAX_HYPOTHESES],
+    /// Each hypothesis's id: a number given when it is seeded or spawned
+    /// (counting up, wrapping), kept while it lives (for a replay's picture).
+    ids: [u8; cfg::MAX_HYPOTHESES],
+    next_id: u8,
     /// `hyps[..live]` are live (at least one).
     live: usize,
+    /// The leader: the whole filter; the others are lighter (`light`).
     best: usize,
+    /// The secondary that weighed the last reading (they take turns).
+    turn: u8,
     /// One hypothesis leads all others by [`cfg::DOMINATE_COST`].
     dominant: bool,
     tracking: Tracking,
@@ -227,8 +241,11 @@ impl Estimator {
         let mut est = Estimator {
             hyps: [filter; cfg::MAX_HYPOTHESES],
             costs: [0; cfg::MAX_HYPOTHESES],
+            ids: [0; cfg::MAX_HYPOTHESES],
+            next_id: 0,
             live: 1,
             best: 0,
+            turn: 0,
             dominant: true,
             tracking: Tracking::Unknown,
             reported: initial,
@@ -258,81 +275,6 @@ impl Estimator {
 
     pub fn arena(&self) -> Arena {
         self.arena
-    }
-
-    /// Forgets everything but the counts: one hypothesis at `pose` with the
-    /// config's initial uncertainty, `Unknown`.
-    pub fn reset(&mut self, pose: Pose) {
-        let mut f = Filter::new(pose);
-        f.keep_in(&self.bounds);
-        self.start(&[(f, 0)], Tracking::Unknown);
-    }
-
-    /// Forgets everything but the counts and starts at a localization's
-    /// fix ([`crate::model::locate`]): one hypothesis per place the
-    /// readings fit (its clusters, never their mean), each with its spread
-    /// and weight; a fix of one place is one seed, its pose and position
-    /// uncertainty. The heading's uncertainty is the compass's.
-    pub fn start_at(&mut self, fix: &crate::model::locate::Fix) {
-        let whole = Seed { pose: fix.pose, sigma_x: fix.sigma_x, sigma_y: fix.sigma_y, weight: 1 };
-        let mut seeds = [whole; cfg::MAX_HYPOTHESES];
-        let clusters = fix.clusters();
-        if clusters.len() < 2 {
-            self.seed(&[whole]);
-            return;
-        }
-        for (seed, c) in seeds.iter_mut().zip(clusters) {
-            *seed = Seed { pose: fix.pose_of(c), sigma_x: c.sigma_x, sigma_y: c.sigma_y, weight: c.weight };
-        }
-        self.seed(seeds.get(..clusters.len().min(cfg::MAX_HYPOTHESES)).unwrap_or(&[whole]));
-    }
-
-    /// Forgets everything but the counts and starts from up to
-    /// [`cfg::MAX_HYPOTHESES`] seeds (a localization's clusters; the rest
-    /// are ignored). With no seed nothing changes. `Located` when one seed
-    /// outweighs the others by [`cfg::DOMINATE_COST`], else `Ambiguous`.
-    pub fn seed(&mut self, seeds: &[Seed]) {
-        // sigma in mm Q16 -> variance Q12 mm^2: (s >> 8)^2 is Q16 mm^2, >> 4;
-        // capped at the largest variance kept
-        let var = |s: Length| {
-            let q8 = i64::from(s.0 >> 8);
-            i32::try_from((q8 * q8) >> 4).unwrap_or(P_MAX).min(P_MAX)
-        };
-        // a weight's cost: 2 ln(w_max / w) ~ 2 ln 2 per bit (Q8: 355)
-        let bits = |w: u32| 32 - w.max(1).leading_zeros() as i32;
-        let top = seeds.iter().map(|s| bits(s.weight)).max().unwrap_or(0);
-        let mut filters = [(Filter::new(Pose::default()), 0); cfg::MAX_HYPOTHESES];
-        let mut n = 0;
-        for (slot, s) in filters.iter_mut().zip(seeds.iter()) {
-            let mut f = Filter::new(s.pose);
-            f.p.set(X, X, var(s.sigma_x));
-            f.p.set(Y, Y, var(s.sigma_y));
-            f.p.set(T, T, R_COMPASS);
-            f.p.condition();
-            f.keep_in(&self.bounds);
-            *slot = (f, (top - bits(s.weight)).saturating_mul(355));
-            n += 1;
-        }
-        if let Some(seeded) = filters.get(..n) {
-            if !seeded.is_empty() {
-                self.start(seeded, Tracking::Located);
-            }
-        }
-    }
-
-    fn start(&mut self, hyps: &[(Filter, i32)], tracking: Tracking) {
-        for ((h, c), (f, cost)) in self.hyps.iter_mut().zip(self.costs.iter_mut()).zip(hyps.iter()) {
-            (*h, *c) = (*f, *cost);
-        }
-        self.live = hyps.len().clamp(1, cfg::MAX_HYPOTHESES);
-        self.tracking = tracking;
-        self.evidence = EvidenceSet::FRESH;
-        self.slack = CATCH_UP_STANDING_Q16;
-        self.standing = true;
-        // the reported pose starts at the best seed (the cheapest)
-        self.best = self.costs.iter().take(self.live).enumerate().min_by_key(|&(_, c)| *c).map_or(0, |(i, _)| i);
-        self.reported = self.best_filter().pose;
-        self.settle();
     }
 
     /// Moves every hypothesis by `motion` held for `dt` (scaled by its
@@ -396,6 +338,13 @@ impl Estimator {
     /// The live hypotheses: pose and cost (Q8, the best's 0).
     pub fn hypotheses(&self) -> impl Iterator<Item = (Pose, i32)> + '_ {
         self.hyps.iter().zip(self.costs.iter()).take(self.live).map(|(h, &c)| (h.pose, c))
+    }
+
+    /// The id of the hypothesis the reported pose follows (the best; see
+    /// [`Estimator::hypotheses`]): given when it was seeded or spawned,
+    /// kept while it lives.
+    pub fn best_id(&self) -> u8 {
+        self.ids.get(self.best).copied().unwrap_or(0)
     }
 
     /// One-sigma uncertainties of the best hypothesis in mm and as an angle

@@ -61,6 +61,9 @@ pub struct Filter {
     /// What the compass reads beyond the heading.
     pub(super) bias: Angle,
     pub(super) p: Covariance,
+    /// A secondary's prediction of its pose block not yet applied
+    /// (`light`; zero for the leader).
+    pub(super) owed: super::light::Owed,
 }
 
 impl Filter {
@@ -72,13 +75,13 @@ impl Filter {
             scales: Scales::ONE,
             bias: Angle::ZERO,
             p: Covariance::diagonal_of([P0_POS, P0_POS, P0_HEADING, P0_SPEED, P0_TURN, P0_TURN, P0_BIAS]),
+            owed: super::light::Owed::NONE,
         }
     }
 
-    /// Moves the pose by `motion` (the lines' motion, scaled by this
-    /// hypothesis's scales) held for `dt` and grows the uncertainty.
-    pub(super) fn predict(&mut self, motion: Motion, dt: Dt, bounds: &Bounds) {
-        let scaled = self.scales.apply(motion);
+    /// Moves the pose by `motion` (the lines' motion; `scaled`, the same by
+    /// this hypothesis's scales) held for `dt` and grows the uncertainty.
+    pub(super) fn predict(&mut self, motion: Motion, scaled: Motion, dt: Dt, bounds: &Bounds) {
         let dt_us = dt.as_micros();
         let p = &mut self.p;
         match (motion, scaled) {

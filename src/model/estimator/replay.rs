@@ -20,7 +20,7 @@ use std::fmt::Write as _;
 use std::string::String;
 use std::vec::Vec;
 
-use super::{Estimator, EstimatorStats};
+use super::{Estimator, EstimatorStats, Tracking};
 use crate::config;
 use crate::math::{Angle, Dt};
 use crate::model::actuator::{Motion, ServoCmd};
@@ -139,6 +139,10 @@ pub enum Start {
 pub struct Estimate {
     pub t_ms: u32,
     pub pose: Pose,
+    /// The id of the hypothesis the reported pose followed
+    /// ([`Estimator::best_id`]).
+    pub hypothesis: u8,
+    pub tracking: Tracking,
 }
 
 /// Where the log starts, by the robot's own localization
@@ -196,7 +200,7 @@ pub fn replay(samples: &[Sample], start: Start, arena: Arena) -> (Vec<Estimate>,
             est.update_heading(h);
         }
         motion = config::actuators::MODEL.motion_from_commands(s.left, s.right);
-        out.push(Estimate { t_ms: s.t_ms, pose: est.pose() });
+        out.push(Estimate { t_ms: s.t_ms, pose: est.pose(), hypothesis: est.best_id(), tracking: est.tracking() });
     }
     (out, est.stats())
 }

@@ -1,16 +1,17 @@
-//! The multi-hypothesis tracker: every reading corrects every hypothesis
-//! and weighs it; the weak are pruned, near twins merged; a sensor that
+//! The multi-hypothesis tracker: every reading corrects the leader and one
+//! other hypothesis in turn and weighs that one against the leader (see
+//! `Estimator::weigh`); the weak are pruned, near twins merged; a sensor that
 //! keeps disagreeing with the best while the robot moves seeds a new
 //! hypothesis that takes its side (a local re-search); the reported pose
 //! follows the best only while it dominates, and then at a bounded pace
 //! (see the module docs of [`super`], "No teleports").
 
 use super::constants::{
-    AMBIGUOUS_GAP_Q16, CATCH_UP_MAX_Q16, CATCH_UP_PER_MM_Q16, CATCH_UP_PER_US, CATCH_UP_STANDING_Q16, DOMINATE_Q8,
-    EVIDENCE_PERIOD_US, EVIDENCE_Q16, LOCATED_VAR, MERGE_LSB, MERGE_Q16, OUTLIER_COST_Q8, PRUNE_Q8, P_MAX, P_RESEARCH,
-    R_COMPASS, SPAWN_Q8,
+    CATCH_UP_MAX_Q16, CATCH_UP_PER_MM_Q16, CATCH_UP_PER_US, CATCH_UP_STANDING_Q16, DOMINATE_Q8, EVIDENCE_PERIOD_US,
+    EVIDENCE_Q16, MERGE_LSB, MERGE_Q16, OUTLIER_COST_Q8, PRUNE_Q8,
 };
-use super::covariance::{BIAS, T, X, Y};
+use super::covariance::BIAS;
+use super::light::Shared;
 use super::predict::Filter;
 use super::update::Outcome;
 use super::{Estimator, Sensor, Tracking, Update};
@@ -36,12 +37,6 @@ pub(super) struct Evidence {
     pub disagreements: u8,
 }
 
-/// What a lidar reading did to the best hypothesis, kept for a re-search.
-struct Disagreement {
-    which: LidarId,
-    distance: Length,
-}
-
 impl Estimator {
     /// Live hypotheses and their costs.
     pub(super) fn live_mut(&mut self) -> impl Iterator<Item = (&mut Filter, &mut i32)> {
@@ -52,11 +47,18 @@ impl Estimator {
         self.hyps.get(self.best).unwrap_or(&self.hyps[0])
     }
 
-    /// Moves every hypothesis and the reported pose by `motion` for `dt`.
+    /// Moves every hypothesis and the reported pose by `motion` for `dt`:
+    /// the leader by its whole filter, the others by its scaled motion on
+    /// their pose blocks (`light`).
     pub(super) fn predict_all(&mut self, motion: Motion, dt: Dt) {
-        let bounds = self.bounds;
-        for (h, _) in self.live_mut() {
-            h.predict(motion, dt, &bounds);
+        let (bounds, best) = (self.bounds, self.best);
+        let scaled = self.best_filter().scales.apply(motion);
+        let shared = if self.live > 1 { Some(Shared::of(self.best_filter(), motion, scaled, dt)) } else { None };
+        for (i, (h, _)) in self.live_mut().enumerate() {
+            match &shared {
+                Some(s) if i != best => h.predict_pose(s, dt, &bounds),
+                _ => h.predict(motion, scaled, dt, &bounds),
+            }
         }
         // the travel: |d| for a straight step, the arc at 100 mm for a turn
         let travel = match motion {
@@ -66,8 +68,7 @@ impl Estimator {
         };
         self.odometer = self.odometer.wrapping_add(travel);
         self.clock_us = self.clock_us.wrapping_add(dt.as_micros());
-        let scales = self.best_filter().scales;
-        advance(&mut self.reported, scales.apply(motion), dt);
+        advance(&mut self.reported, scaled, dt);
         if motion == Motion::Stop {
             if !self.standing {
                 self.slack = self.slack.min(CATCH_UP_STANDING_Q16);
@@ -108,57 +109,100 @@ impl Estimator {
         }
     }
 
-    /// A lidar's reading through every hypothesis.
+    /// A lidar's reading through the leader and one secondary (see
+    /// [`Estimator::weigh`]).
     pub(super) fn lidar_all(&mut self, which: LidarId, distance: Length) -> Update {
         let counted = self.counts(Sensor::of(which));
-        let (arena, bounds, best) = (self.arena, self.bounds, self.best);
-        let (mut result, mut possible, mut repairs) = (Update::Unusable, false, 0u32);
-        for (i, (h, cost)) in self.live_mut().enumerate() {
-            let (outcome, ok) = match h.lidar_reading(&arena, which, distance) {
-                None => (Outcome { update: Update::Unusable, nis_q8: 0, nu: 0 }, false),
-                Some(r) => {
-                    let (o, rep) = h.correct(r.row, r.nu, r.r, &bounds);
-                    repairs = repairs.saturating_add(rep);
-                    (o, r.possible)
-                }
+        let (arena, bounds, best, other) = (self.arena, self.bounds, self.best, self.next_secondary());
+        let mut through = |i: usize| -> Option<(Outcome, bool)> {
+            let h = self.hyps.get_mut(i)?;
+            let Some(r) = h.lidar_reading(&arena, which, distance) else { return Some((Outcome::UNUSABLE, false)) };
+            let (outcome, repairs) = if i == best {
+                h.correct(r.row, r.nu, r.r, &bounds)
+            } else {
+                h.correct_pose(r.row, r.nu, r.r, &bounds)
             };
+            self.stats.repairs = self.stats.repairs.saturating_add(repairs);
             // a reading no position in the arena gives weighs nothing
-            if counted && (ok || outcome.update == Update::Accepted) {
-                *cost = cost.saturating_add(weight_of(outcome));
-            }
-            if i == best {
-                (result, possible) = (outcome.update, ok);
-            }
-        }
-        self.stats.repairs = self.stats.repairs.saturating_add(repairs);
-        if self.disagreed(Sensor::of(which), result, possible && counted) {
-            self.research_lidar(Disagreement { which, distance });
+            Some((outcome, r.possible))
+        };
+        let lead = through(best).unwrap_or((Outcome::UNUSABLE, false));
+        let second = other.and_then(&mut through);
+        self.weigh(counted, lead, other.zip(second));
+        if self.disagreed(Sensor::of(which), lead.0.update, lead.1 && counted) {
+            self.research_lidar(which, distance);
         }
         self.settle();
-        result
+        lead.0.update
     }
 
-    /// The compass's reading through every hypothesis.
+    /// The compass's reading through the leader and one secondary (see
+    /// [`Estimator::weigh`]); the secondary reads it with the leader's bias.
     pub(super) fn heading_all(&mut self, heading: Angle) -> Update {
         let counted = self.counts(Sensor::Compass);
-        let (bounds, best) = (self.bounds, self.best);
-        let (mut result, mut repairs) = (Update::Unusable, 0u32);
-        for (i, (h, cost)) in self.live_mut().enumerate() {
-            let (o, rep) = h.update_heading(heading, &bounds);
+        let (bounds, best, other) = (self.bounds, self.best, self.next_secondary());
+        let (bias, bias_var) = (self.best_filter().bias, self.best_filter().p.get(BIAS, BIAS));
+        let mut repairs = 0u32;
+        let mut lead = Outcome::UNUSABLE;
+        if let Some(h) = self.hyps.get_mut(best) {
+            let rep;
+            (lead, rep) = h.update_heading(heading, &bounds);
             repairs = repairs.saturating_add(rep);
-            if counted {
-                *cost = cost.saturating_add(weight_of(o));
-            }
-            if i == best {
-                result = o.update;
-            }
+        }
+        let mut second = None;
+        if let Some((i, h)) = other.and_then(|i| Some((i, self.hyps.get_mut(i)?))) {
+            let (row, nu, r) = h.compass_reading_pose(heading, bias, bias_var);
+            let (o, rep) = h.correct_pose(row, nu, r, &bounds);
+            repairs = repairs.saturating_add(rep);
+            second = Some((i, (o, true)));
         }
         self.stats.repairs = self.stats.repairs.saturating_add(repairs);
-        if self.disagreed(Sensor::Compass, result, counted) {
+        self.weigh(counted, (lead, true), second);
+        if self.disagreed(Sensor::Compass, lead.update, counted) {
             self.research_compass(heading);
         }
         self.settle();
-        result
+        lead.update
+    }
+
+    /// The secondary that weighs the next reading: each in turn (none with
+    /// one hypothesis).
+    fn next_secondary(&mut self) -> Option<usize> {
+        if self.live < 2 {
+            return None;
+        }
+        let mut i = usize::from(self.turn);
+        for _ in 0..2 {
+            i = if i + 1 >= self.live { 0 } else { i + 1 };
+            if i != self.best {
+                break;
+            }
+        }
+        self.turn = i as u8;
+        Some(i)
+    }
+
+    /// Weighs a counted reading. The costs are relative to the leader's
+    /// (`settle` keeps the cheapest at 0): a reading moves the secondary
+    /// that saw it (`second`: its index, outcome and whether the reading
+    /// could come from the arena there, as `lead`'s) by how much worse it
+    /// explains the reading than the leader. The secondaries that did not
+    /// see it stay where they were against the leader: none wins or loses
+    /// by a reading it did not see.
+    fn weigh(&mut self, counted: bool, lead: (Outcome, bool), second: Option<(usize, (Outcome, bool))>) {
+        let weight = |(o, possible): (Outcome, bool)| {
+            // a reading no position in the arena gives weighs nothing
+            if counted && (possible || o.update == Update::Accepted) {
+                weight_of(o)
+            } else {
+                0
+            }
+        };
+        if let Some((i, seen)) = second {
+            if let Some(c) = self.costs.get_mut(i) {
+                *c = c.saturating_add(weight(seen)).saturating_sub(weight(lead));
+            }
+        }
     }
 
     /// Counts a disagreement of `sensor` with the best hypothesis (only
@@ -184,105 +228,37 @@ impl Estimator {
         }
     }
 
-    /// A local re-search for a lidar that keeps disagreeing: a copy of the
-    /// best with its position uncertain (`cfg::RESEARCH_SIGMA_MM` on each
-    /// axis, uncorrelated) takes the reading; if even that gate refuses it,
-    /// the copy moves along the wall's normal to where the reading puts it.
-    #[cold]
-    #[inline(never)]
-    fn research_lidar(&mut self, d: Disagreement) {
-        let (arena, bounds) = (self.arena, self.bounds);
-        let mut h = *self.best_filter();
-        for axis in [X, Y] {
-            h.p.set(axis, axis, h.p.get(axis, axis).max(P_RESEARCH));
-            h.p.decouple(axis);
-        }
-        let Some(r) = h.lidar_reading(&arena, d.which, d.distance) else { return };
-        if h.correct(r.row, r.nu, r.r, &bounds).0.update != Update::Accepted {
-            let step = Coord::from_length(Length(if r.toward_high { r.nu } else { r.nu.saturating_neg() }));
-            let c = if r.axis == X { &mut h.pose.x } else { &mut h.pose.y };
-            *c = Coord(c.0.saturating_add(step.0));
-            h.keep_in(&bounds);
-            if let Some(r) = h.lidar_reading(&arena, d.which, d.distance) {
-                h.correct(r.row, r.nu, r.r, &bounds);
-            }
-        }
-        self.stats_of(Sensor::of(d.which)).researched += 1;
-        self.spawn(h);
-    }
-
-    /// A local re-search for a compass that keeps disagreeing: either the
-    /// heading is lost (a copy with the heading as uncertain as kept and the
-    /// position by `cfg::RESEARCH_SIGMA_MM`, taking the reading) or the compass's bias moved (a copy with the bias as
-    /// uncertain, taking it). The lidars decide between them and the best.
-    #[cold]
-    #[inline(never)]
-    fn research_compass(&mut self, heading: Angle) {
-        let bounds = self.bounds;
-        for state in [T, BIAS] {
-            let mut h = *self.best_filter();
-            let (row, nu) = h.compass_reading(heading);
-            // at the cap (57 degrees one sigma) the gate passes half a turn:
-            // the correction takes the reading
-            h.p.set(state, state, P_MAX);
-            h.p.decouple(state);
-            if state == T {
-                // what lost the heading (a held turn, the skid) moved the
-                // position too: the lidars then place it afresh
-                for axis in [X, Y] {
-                    h.p.set(axis, axis, h.p.get(axis, axis).max(P_RESEARCH));
-                    h.p.decouple(axis);
-                }
-            }
-            h.correct(row, nu, R_COMPASS, &bounds);
-            self.spawn(h);
-        }
-        self.stats.compass.researched += 1;
-    }
-
-    /// Adds `h` behind the best by [`cfg::SPAWN_COST`], in a free slot or in
-    /// place of the costliest other hypothesis.
-    fn spawn(&mut self, h: Filter) {
-        let cost = self.costs.get(self.best).copied().unwrap_or(0).saturating_add(SPAWN_Q8);
-        let slot = if self.live < self.hyps.len() {
-            self.live += 1;
-            self.live - 1
-        } else {
-            let best = self.best;
-            let worst = self.costs.iter().enumerate().filter(|&(i, _)| i != best).max_by_key(|&(_, c)| *c);
-            match worst {
-                Some((i, _)) => i,
-                None => return,
-            }
-        };
-        if let (Some(f), Some(c)) = (self.hyps.get_mut(slot), self.costs.get_mut(slot)) {
-            (*f, *c) = (h, cost);
-        }
-        // a new hypothesis is weighed on every sensor's next reading
-        self.evidence = super::EvidenceSet::FRESH;
-        self.stats.spawned = self.stats.spawned.saturating_add(1);
-    }
-
     /// After a correction: costs relative to the best, the weak pruned, near
     /// twins merged, the tracking state, and the reported pose's catch-up.
     pub(super) fn settle(&mut self) {
-        let min = self.costs.iter().take(self.live).copied().min().unwrap_or(0);
+        // the cheapest (the first of equals) leads; costs relative to it
+        let (mut best, mut min) = (0, i32::MAX);
+        for (i, &c) in self.costs.iter().take(self.live).enumerate() {
+            if c < min {
+                (best, min) = (i, c);
+            }
+        }
         for c in self.costs.iter_mut().take(self.live) {
             *c = c.saturating_sub(min);
         }
+        self.lead(best);
+        // the weak pruned, the costlier of twins (the later of equals)
+        // merged: never the leader, so its whole filter stays
         let mut i = 0;
         while i < self.live {
-            let cost = self.costs.get(i).copied().unwrap_or(0);
-            let twin = (0..self.live)
-                .any(|j| j != i && self.twins(i, j) && self.cost(j) <= cost && (self.cost(j) < cost || j < i));
+            let cost = self.cost(i);
+            // (the costs first: each pair's position is compared once)
+            let twin = i != self.best
+                && (0..self.live)
+                    .any(|j| j != i && self.cost(j) <= cost && (self.cost(j) < cost || j < i) && self.twins(i, j));
             if cost > PRUNE_Q8 || twin {
                 self.remove(i);
             } else {
                 i += 1;
             }
         }
-        let (best, second) = self.two_best();
-        self.best = best;
+        let best = self.best;
+        let second = (0..self.live).filter(|&i| i != best).map(|i| self.cost(i)).min();
         let dominant = second.is_none_or(|c| c.saturating_sub(self.cost(best)) >= DOMINATE_Q8);
         self.dominant = dominant;
         let was = self.tracking;
@@ -298,20 +274,20 @@ impl Estimator {
         }
     }
 
-    fn cost(&self, i: usize) -> i32 {
-        self.costs.get(i).copied().unwrap_or(i32::MAX)
+    /// Hypothesis `new` leads: if it did not, it takes the old leader's
+    /// scales and bias (`Filter::take_over`).
+    fn lead(&mut self, new: usize) {
+        if new != self.best {
+            let old = *self.best_filter();
+            if let Some(h) = self.hyps.get_mut(new) {
+                h.take_over(&old);
+            }
+            self.best = new;
+        }
     }
 
-    /// The cheapest hypothesis and the next cheapest's cost.
-    fn two_best(&self) -> (usize, Option<i32>) {
-        let mut best = 0;
-        for i in 1..self.live {
-            if self.cost(i) < self.cost(best) {
-                best = i;
-            }
-        }
-        let second = (0..self.live).filter(|&i| i != best).map(|i| self.cost(i)).min();
-        (best, second)
+    fn cost(&self, i: usize) -> i32 {
+        self.costs.get(i).copied().unwrap_or(i32::MAX)
     }
 
     /// Two hypotheses within [`cfg::MERGE_MM`] on each axis and
@@ -331,60 +307,10 @@ impl Estimator {
         }
         self.hyps.swap(i, last);
         self.costs.swap(i, last);
+        self.ids.swap(i, last);
         self.live = last;
-    }
-
-    /// The reported position is within [`cfg::AMBIGUOUS_GAP_MM`] of the best
-    /// hypothesis's on each axis.
-    fn caught_up(&self) -> bool {
-        let best = self.best_filter().pose;
-        let near = |u: Coord, v: Coord| (u.0.wrapping_sub(v.0) >> 16).unsigned_abs() <= AMBIGUOUS_GAP_Q16 as u64;
-        near(self.reported.x, best.x) && near(self.reported.y, best.y)
-    }
-
-    /// The best hypothesis's position variances are below the config's
-    /// steering limit: an unknown start has become a located one.
-    fn settled(&self) -> bool {
-        let p = &self.best_filter().p;
-        let limit = LOCATED_VAR;
-        p.get(X, X) <= limit && p.get(Y, Y) <= limit
-    }
-
-    /// The reported pose: while the estimate is unknown it is the best's;
-    /// while one hypothesis dominates it moves toward it by at most the
-    /// slack saved up (per axis); while ambiguous it only dead-reckons.
-    pub(super) fn follow(&mut self) {
-        // tick bar: the best pose's fields, not a copy of the pose (a memcpy call)
-        let (best, best_x, best_y) = (self.best, self.best_filter().pose.x, self.best_filter().pose.y);
-        match self.tracking {
-            Tracking::Unknown => {
-                if let Some(h) = self.hyps.get(best) {
-                    self.reported = h.pose;
-                }
-            }
-            Tracking::Ambiguous if !self.dominant => {}
-            Tracking::Ambiguous | Tracking::Located => {
-                // (max/min, not clamp: clamp's panic for bounds the wrong way
-                // round would reach the image)
-                let toward = |c: Coord, to: Coord, most: i32| -> i32 {
-                    let most = i64::from(most.max(0));
-                    (to.0.wrapping_sub(c.0) >> 16).max(-most).min(most) as i32
-                };
-                let sx = toward(self.reported.x, best_x, self.slack);
-                let sy = toward(self.reported.y, best_y, self.slack);
-                self.reported.x = Coord(self.reported.x.0.wrapping_add(i64::from(sx) << 16));
-                self.reported.y = Coord(self.reported.y.0.wrapping_add(i64::from(sy) << 16));
-                self.slack = self.slack.saturating_sub(sx.saturating_abs().max(sy.saturating_abs()));
-                let b = &self.best_filter().pose;
-                (self.reported.theta, self.reported.theta_frac) = (b.theta, b.theta_frac);
-            }
-        }
-        // a located (or ambiguous) robot is inside the box; a typed pose
-        // (unknown) is kept as the hypothesis keeps it
-        if self.tracking != Tracking::Unknown {
-            let b = self.inside;
-            super::predict::clamp_mm(&mut self.reported.x, b.low_mm, b.high_x_mm);
-            super::predict::clamp_mm(&mut self.reported.y, b.low_mm, b.high_y_mm);
+        if self.best == last {
+            self.best = i;
         }
     }
 }

@@ -5,7 +5,7 @@ use super::constants::{
     BIAS_MAX_LSB, GATE_SQ_Q8, LSB_PER_TILDE_MM_Q9, MIN_NORMAL, R_COMPASS, R_INCIDENCE, R_LIDAR, SCALE_MAX, SCALE_MIN,
     TILDE_Q16_PER_LSB,
 };
-use super::covariance::{Covariance, BIAS, CCW, CW, N, SPEED, T, X, Y};
+use super::covariance::{each, Covariance, BIAS, CCW, CW, N, SPEED, T, X, Y};
 use super::predict::{Bounds, Filter};
 use super::Update;
 use crate::config::estimator as cfg;
@@ -20,11 +20,18 @@ const ONE: i32 = 1 << 30;
 /// and the heading, the compass's the bias and the heading.
 #[derive(Clone, Copy)]
 pub(super) struct Row {
-    unit: usize,
-    positive: bool,
-    lever: usize,
+    pub unit: usize,
+    pub positive: bool,
+    pub lever: usize,
     /// Q16; |coef| <= THETA_MAX < 2^19.
-    coef: i32,
+    pub coef: i32,
+}
+
+impl Row {
+    /// `H = e_state`: a reading of one state alone.
+    pub const fn unit_on(state: usize) -> Row {
+        Row { unit: state, positive: true, lever: state, coef: 0 }
+    }
 }
 
 /// What a correction did, with the reading's normalised squared innovation
@@ -39,6 +46,8 @@ pub(super) struct Outcome {
 }
 
 impl Outcome {
+    pub const UNUSABLE: Outcome = Outcome::not(Update::Unusable);
+
     const fn not(update: Update) -> Outcome {
         Outcome { update, nis_q8: 0, nu: 0 }
     }
@@ -141,7 +150,10 @@ impl Filter {
         // |b| < 2^27: sb >= 3
         let sb = normalize(mb).1 - 2;
         // t = beta / S 2^(30 - ns) (|t| < 2^29), rounded toward zero.
-        let t: [i32; N] = core::array::from_fn(|i| over_s(b.get(i).copied().unwrap_or(0), sb, y));
+        let t = each(
+            #[inline(always)]
+            |i| over_s(b.get(i).copied().unwrap_or(0), sb, y),
+        );
         // K = b / S = t 2^(ns - sb - 30); in Q21: t 2^(ns - sb - 9). For a
         // valid P, |K_i| <= sqrt(P_ii / S) < 2^8; the largest |t| is at
         // least 2^27 - 3, so a shift above 2 means |K| >= 2^9: an invalid P.
@@ -158,9 +170,8 @@ impl Filter {
         self.pose.y = Coord(self.pose.y.0.wrapping_add(mul_wide(gain(Y), nu) >> 5));
         // Heading and bias: (L rad) mm -> angle LSB: mul_hi(K, 2^32 / (2 pi L)
         // 2^9) nu >> 14; modulo one turn (the low 32 bits).
-        let to_angle = |k: i32| Angle((mul_wide(mul_hi(k, LSB_PER_TILDE_MM_Q9), nu) >> 14) as u32);
-        self.pose.theta = self.pose.theta.wrapping_add(to_angle(gain(T)));
-        let bias = self.bias.wrapping_add(to_angle(gain(BIAS)));
+        self.pose.theta = self.pose.theta.wrapping_add(to_angle(gain(T), nu));
+        let bias = self.bias.wrapping_add(to_angle(gain(BIAS), nu));
         self.bias = Angle(bias.diff(Angle::ZERO).clamp(-BIAS_MAX_LSB, BIAS_MAX_LSB) as u32);
         // Scales: L dscale mm Q37 -> dscale Q45 (/ 256) -> Q29 (>> 16), kept in bounds.
         let to_scale = |v: i32, k: i32| {
@@ -175,12 +186,23 @@ impl Filter {
         // round down (t and beta positive, y below 1/S): less is removed
         // than exact arithmetic would.
         let ep = ns as i32 - 2 * sb as i32 + 2 + k as i32;
-        let beta: [i32; N] = core::array::from_fn(|i| b.get(i).copied().unwrap_or(0) << sb); // |beta| < 2^30
+        let beta = each(
+            #[inline(always)]
+            |i| b.get(i).copied().unwrap_or(0) << sb,
+        ); // |beta| < 2^30
         self.p.remove_outer(&t, &beta, ep);
         let repairs = self.p.condition();
         self.keep_in(bounds);
         (Outcome { update: Update::Accepted, nis_q8, nu }, repairs)
     }
+}
+
+/// A gain `k` (Q21, per (L rad) mm) times `nu` (Q16 mm) as an angle:
+/// `mul_hi(K, 2^32 / (2 pi L) 2^9) nu >> 14`, modulo one turn (the low 32
+/// bits).
+#[inline(always)]
+pub(super) fn to_angle(k: i32, nu: i32) -> Angle {
+    Angle((mul_wide(mul_hi(k, LSB_PER_TILDE_MM_Q9), nu) >> 14) as u32)
 }
 
 /// `nu^2 / S` in Q8, from the reciprocal `y` of `S` normalised by `ns`
@@ -189,7 +211,7 @@ impl Filter {
 /// 18 - k)` (the 2^64 of the two high words against Q32 of nu^2 and
 /// Q(12 - k) of S), in Q8 `2^(ns - 2 na - 10 - k)`. Saturates; a gated
 /// reading's is at most gate^2 (Q8 below 2^12).
-fn normalised_square(nu: i32, y: u32, ns: u32, k: u32) -> i32 {
+pub(super) fn normalised_square(nu: i32, y: u32, ns: u32, k: u32) -> i32 {
     if nu == 0 {
         return 0;
     }
@@ -220,7 +242,7 @@ pub(super) fn gate_bound(s: i32, k: u32) -> i64 {
 /// `beta / S` for one entry of `b`: `|b| 2^sb` times `y` (1/S, see
 /// [`reciprocal`]), high word, with `b`'s sign (rounded toward zero).
 #[inline(always)]
-fn over_s(bi: i32, sb: u32, y: u32) -> i32 {
+pub(super) fn over_s(bi: i32, sb: u32, y: u32) -> i32 {
     let m = mul_hi_u(bi.unsigned_abs() << sb, y) as i32;
     if bi < 0 {
         -m
@@ -245,11 +267,18 @@ fn project(p: &Covariance, h: Row) -> ([i32; N], i32, u32) {
     // |P >> k| < 2^23, so << 8 < 2^31; |coef| < 2^19, << 8 < 2^27: mul_hi
     // gives P coef / 2^16, below 2^26 (+ 3 LSB of rounding); |b| < 2^27.
     let c8 = h.coef << 8;
-    let mut b = [0i32; N];
-    for ((bi, &l), &u) in b.iter_mut().zip(lever.iter()).zip(unit.iter()) {
-        let (l, u) = (mul_hi((l >> k) << 8, c8), u >> k);
-        *bi = if h.positive { l + u } else { l - u };
-    }
+    let b = each(
+        #[inline(always)]
+        |i| {
+            let at = |row: &[i32; N]| row.get(i).copied().unwrap_or(0);
+            let (l, u) = (mul_hi((at(&lever) >> k) << 8, c8), at(&unit) >> k);
+            if h.positive {
+                l + u
+            } else {
+                l - u
+            }
+        },
+    );
     // H b = +-b_unit + coef b_lever / 2^16: b << 4 < 2^31, coef << 12 < 2^31,
     // the product below 9 2^26; the sum below 81 2^23 < 2^30.
     let bu = b.get(h.unit).copied().unwrap_or(0);
@@ -261,7 +290,7 @@ fn project(p: &Covariance, h: Row) -> ([i32; N], i32, u32) {
 
 /// The shift `k` with `m >> k < 2^23` (0 when `m` already is).
 #[inline(always)]
-fn scale_shift(m: u32) -> u32 {
+pub(super) fn scale_shift(m: u32) -> u32 {
     if m < 1 << 23 {
         0
     } else {

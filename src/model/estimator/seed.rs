@@ -1,0 +1,91 @@
+//! Where the estimator starts: a typed pose, or a localization's fix as
+//! one hypothesis per place the readings fit (see the module docs of
+//! [`super`]).
+
+use super::constants::{CATCH_UP_STANDING_Q16, P_MAX, R_COMPASS};
+use super::covariance::{T, X, Y};
+use super::predict::Filter;
+use super::{Estimator, EvidenceSet, Seed, Tracking};
+use crate::config::estimator as cfg;
+use crate::math::Length;
+use crate::model::state::Pose;
+
+impl Estimator {
+    /// Forgets everything but the counts: one hypothesis at `pose` with the
+    /// config's initial uncertainty, `Unknown`.
+    pub fn reset(&mut self, pose: Pose) {
+        let mut f = Filter::new(pose);
+        f.keep_in(&self.bounds);
+        self.start(&[(f, 0)], Tracking::Unknown);
+    }
+
+    /// Forgets everything but the counts and starts at a localization's
+    /// fix ([`crate::model::locate`]): one hypothesis per place the
+    /// readings fit (its clusters, never their mean), each with its spread
+    /// and weight; a fix of one place is one seed, its pose and position
+    /// uncertainty. The heading's uncertainty is the compass's.
+    pub fn start_at(&mut self, fix: &crate::model::locate::Fix) {
+        let whole = Seed { pose: fix.pose, sigma_x: fix.sigma_x, sigma_y: fix.sigma_y, weight: 1 };
+        let mut seeds = [whole; cfg::MAX_HYPOTHESES];
+        let clusters = fix.clusters();
+        if clusters.len() < 2 {
+            self.seed(&[whole]);
+            return;
+        }
+        for (seed, c) in seeds.iter_mut().zip(clusters) {
+            *seed = Seed { pose: fix.pose_of(c), sigma_x: c.sigma_x, sigma_y: c.sigma_y, weight: c.weight };
+        }
+        self.seed(seeds.get(..clusters.len().min(cfg::MAX_HYPOTHESES)).unwrap_or(&[whole]));
+    }
+
+    /// Forgets everything but the counts and starts from up to
+    /// [`cfg::MAX_HYPOTHESES`] seeds (a localization's clusters; the rest
+    /// are ignored). With no seed nothing changes. `Located` when one seed
+    /// outweighs the others by [`cfg::DOMINATE_COST`], else `Ambiguous`.
+    pub fn seed(&mut self, seeds: &[Seed]) {
+        // sigma in mm Q16 -> variance Q12 mm^2: (s >> 8)^2 is Q16 mm^2, >> 4;
+        // capped at the largest variance kept
+        let var = |s: Length| {
+            let q8 = i64::from(s.0 >> 8);
+            i32::try_from((q8 * q8) >> 4).unwrap_or(P_MAX).min(P_MAX)
+        };
+        // a weight's cost: 2 ln(w_max / w) ~ 2 ln 2 per bit (Q8: 355)
+        let bits = |w: u32| 32 - w.max(1).leading_zeros() as i32;
+        let top = seeds.iter().map(|s| bits(s.weight)).max().unwrap_or(0);
+        let mut filters = [(Filter::new(Pose::default()), 0); cfg::MAX_HYPOTHESES];
+        let mut n = 0;
+        for (slot, s) in filters.iter_mut().zip(seeds.iter()) {
+            let mut f = Filter::new(s.pose);
+            f.p.set(X, X, var(s.sigma_x));
+            f.p.set(Y, Y, var(s.sigma_y));
+            f.p.set(T, T, R_COMPASS);
+            f.p.condition();
+            f.keep_in(&self.bounds);
+            *slot = (f, (top - bits(s.weight)).saturating_mul(355));
+            n += 1;
+        }
+        if let Some(seeded) = filters.get(..n) {
+            if !seeded.is_empty() {
+                self.start(seeded, Tracking::Located);
+            }
+        }
+    }
+
+    fn start(&mut self, hyps: &[(Filter, i32)], tracking: Tracking) {
+        for (((h, c), id), (f, cost)) in
+            self.hyps.iter_mut().zip(self.costs.iter_mut()).zip(self.ids.iter_mut()).zip(hyps.iter())
+        {
+            (*h, *c, *id) = (*f, *cost, self.next_id);
+            self.next_id = self.next_id.wrapping_add(1);
+        }
+        self.live = hyps.len().clamp(1, cfg::MAX_HYPOTHESES);
+        self.tracking = tracking;
+        self.evidence = EvidenceSet::FRESH;
+        self.slack = CATCH_UP_STANDING_Q16;
+        self.standing = true;
+        // the reported pose starts at the best seed (the cheapest)
+        self.best = self.costs.iter().take(self.live).enumerate().min_by_key(|&(_, c)| *c).map_or(0, |(i, _)| i);
+        self.reported = self.best_filter().pose;
+        self.settle();
+    }
+}
