@@ -12,7 +12,7 @@
 //!    turn moved less than [`config::locate::BLOCKED_TURN_DEG`] (the body against a
 //!    wall), the next turns go the other way.
 //! 3. From [`config::locate::MIN_VIEWS`] views on, the search after each view
-//!    ([`config::locate::COLUMNS_PER_TICK`] columns a tick): a fix that is not
+//!    ([`config::locate::SCORES_PER_TICK`] view scores a tick): a fix that is not
 //!    ambiguous and is certain enough for `goto`
 //!    ([`crate::config::goto::MAX_SIGMA_MM`]) ends the procedure;
 //!    otherwise (ambiguous, too uncertain, or nothing fits) another turn
@@ -241,7 +241,7 @@ impl Survey {
                 self.enter(Phase::View)
             }
             Phase::Settle => Action::Stand,
-            Phase::Search(search) => match search.step(arena, config::locate::COLUMNS_PER_TICK) {
+            Phase::Search(search) => match search.step(arena, config::locate::SCORES_PER_TICK) {
                 None => Action::Stand,
                 Some(result) => self.searched(result.map_err(Failure::from)),
             },
