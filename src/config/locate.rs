@@ -41,6 +41,12 @@ pub const PIVOT_PRIOR_MM: f64 = 3.0;
 /// reading's spurious echo, `sim::SPURIOUS_SHARE`): the rest still pin
 /// the pose.
 pub const MIN_READINGS_FOR_OUTLIER: u32 = 3;
+/// A fix that leaves a reading unexplained resting on fewer grid points
+/// than this is flagged ambiguous (`model::locate::Fix::untrusted`): in
+/// the lab's world 1 right fix of 1,000 is such, in issue #29's hard
+/// world 79 wrong ones and 29 right (`tests/localization/locate.rs`,
+/// three views).
+pub const MIN_POINTS_WITH_OUTLIER: u32 = 10;
 /// When nothing fits at the compass's heading, the search tries headings
 /// this far apart, degrees (the compass's 2.5-degree spread, `estimator::
 /// COMPASS_SIGMA_DEG`) ...

@@ -88,6 +88,22 @@ pub struct Fix {
     /// [`cfg::AMBIGUOUS_SPAN_MM`] on an axis: they do not say which, or
     /// where along it the robot is.
     pub ambiguous: bool,
+    /// One place fits, but the search cannot vouch for the fix: the
+    /// compass's own heading fitted nowhere (the compass is disturbed
+    /// there, and by how much differs from view to view: issue #29's hard
+    /// world, 5 to 8 degrees between the views of one start, so the
+    /// common offset found says little about the last view's heading), or
+    /// the fit leaves a reading unexplained and rests on fewer than
+    /// [`cfg::MIN_POINTS_WITH_OUTLIER`] grid points (a sliver of the box
+    /// fits: the readings are not what the model expects). Reported as
+    /// uncertain; more views do not help (each brings its own compass
+    /// error).
+    pub untrusted: bool,
+    /// Heading steps ([`cfg::HEADING_STEP_DEG`]) between the fix's heading
+    /// and the compass's: 0 when the compass's own heading fits.
+    pub compass_steps: u8,
+    /// Readings the fix leaves unexplained (0 or 1).
+    pub unexplained: u8,
     /// The places, heaviest first: `clusters[..count]` ([`Fix::clusters`]).
     cluster_slots: [Cluster; MAX_CLUSTERS],
     count: u8,
@@ -244,7 +260,10 @@ impl Search {
     /// A pass is over: its fix, or the next pass.
     fn pass_done(&mut self, views: &[Option<View>; MAX_VIEWS]) -> Option<Result<Fix, LocateError>> {
         self.gather.settle();
-        if let Some(fix) = fix_from(&self.sums, &self.gather, views) {
+        if let Some(mut fix) = fix_from(&self.sums, &self.gather, views) {
+            fix.compass_steps = u8::try_from(self.heading_try.div_ceil(2)).unwrap_or(u8::MAX);
+            fix.unexplained = u8::try_from(self.allowed).unwrap_or(u8::MAX);
+            fix.untrusted = fix.compass_steps > 0 || (self.allowed > 0 && fix.points < cfg::MIN_POINTS_WITH_OUTLIER);
             return Some(Ok(fix));
         }
         (self.column, self.row, self.sums, self.gather) = (0, 0, Sums::EMPTY, Gather::EMPTY);
@@ -349,6 +368,9 @@ fn fix_from(sums: &Sums, gather: &Gather, views: &[Option<View>; MAX_VIEWS]) -> 
         sigma_y,
         points: sums.n,
         ambiguous: gather.clusters().nth(1).is_some() || first.wide(),
+        untrusted: false,
+        compass_steps: 0,
+        unexplained: 0,
         cluster_slots: slots,
         count,
     })
