@@ -17,10 +17,12 @@
 //!    ([`crate::config::goto::MAX_SIGMA_MM`]) ends the procedure;
 //!    otherwise (ambiguous, too uncertain, or nothing fits) another turn
 //!    and view, up to [`MAX_VIEWS`], whose answer is taken as it is (an
-//!    ambiguous fix says so).
+//!    ambiguous fix says so). A fix of one place the search cannot vouch
+//!    for ([`Fix::untrusted`]: reported uncertain) ends it too: more views
+//!    each bring their own compass error.
 //!
 //! `tests/localization/locate.rs` measures this survey on the realistic simulator's
-//! sensors (99.2 % right from random starts); `tests/localization/localize.rs` runs it
+//! sensors (99.1 % right from random starts, the lab's world); `tests/localization/localize.rs` runs it
 //! in the loop.
 //!
 //! The survey owns no hardware and no clock: the loop hands it the

@@ -39,11 +39,12 @@
 //! pivot; its place is the last view's with the pivot that fits best. Views in more directions put beams on walls
 //! of both axes. A view after a turn that did not happen (a body against a
 //! wall; the compass shows it) is the same view again and adds nothing.
-//! One reading in all may go unexplained (a spurious echo) when nothing
-//! explains them all ([`cfg::MIN_READINGS_FOR_OUTLIER`]).
+//! A reading may go unexplained (a spurious echo) when nothing explains
+//! them all, one more for each [`cfg::READINGS_PER_UNEXPLAINED`] readings
+//! up to [`cfg::MAX_UNEXPLAINED`] ([`cfg::MIN_READINGS_FOR_OUTLIER`]).
 //!
 //! # Cost
-//! Two [`Beam`]s per grid point and view: 153 x 99 points in the team's box
+//! Two [`crate::model::measurement::Beam`]s per grid point and view: 153 x 99 points in the team's box
 //! at 5 mm, about 17.7 million lx106 instructions for one view (0.22 s at 80
 //! MHz, measured by the lx106 benchmarks); a later view is tried, once per
 //! pivot, only where the first fits, and a failed search is repeated at
@@ -102,7 +103,7 @@ pub struct Fix {
     /// Heading steps ([`cfg::HEADING_STEP_DEG`]) between the fix's heading
     /// and the compass's: 0 when the compass's own heading fits.
     pub compass_steps: u8,
-    /// Readings the fix leaves unexplained (0 or 1).
+    /// Readings the fix may leave unexplained (its pass's allowance).
     pub unexplained: u8,
     /// The places, heaviest first: `clusters[..count]` ([`Fix::clusters`]).
     cluster_slots: [Cluster; MAX_CLUSTERS],
@@ -154,7 +155,7 @@ pub const MAX_VIEWS: usize = 8;
 /// [`cfg::TURN_TOLERANCE_MM`] for the pivot between those tried and a
 /// turn's own spread. Views past [`MAX_VIEWS`] are not used. Two
 /// views can agree on a wrong pose far off; the robot's procedure
-/// (`control::localize`) takes at least three, 45 degrees apart (turning
+/// (`control::localize`) takes at least four, 45 degrees apart (turning
 /// the other way when the compass shows a turn blocked), and more while
 /// the fix is ambiguous.
 ///
@@ -184,7 +185,8 @@ pub struct Search {
     readings: u32,
     /// The heading tried: 0 the compass's, then 2n - 1 (+n steps), 2n (-n).
     heading_try: u32,
-    /// Readings a point may leave unexplained in this pass (0 or 1).
+    /// Readings a point may leave unexplained in this pass (0 to
+    /// [`cfg::MAX_UNEXPLAINED`]).
     allowed: u32,
     /// The next grid point of this pass: its column and row.
     column: i32,
@@ -195,8 +197,9 @@ pub struct Search {
 }
 
 impl Search {
-    /// Passes over the grid at most: two per heading tried.
-    pub const MAX_PASSES: u32 = 2 * (2 * cfg::HEADING_STEPS as u32 + 1);
+    /// Passes over the grid at most: one per heading tried and number of
+    /// readings left unexplained.
+    pub const MAX_PASSES: u32 = (1 + cfg::MAX_UNEXPLAINED) * (2 * cfg::HEADING_STEPS as u32 + 1);
 
     /// A search of `views` (the first [`MAX_VIEWS`]), not started.
     pub fn new(views: &[Readings]) -> Result<Search, LocateError> {
@@ -224,7 +227,8 @@ impl Search {
 
     /// Searches on for up to `scores` more view scores (a view's two
     /// lidar models at a grid point and a pivot: the slice's work, about
-    /// even; a grid point takes one to [`PIVOTS`] per later view): `None`
+    /// even; a grid point takes one to the pivots tried,
+    /// [`cfg::PIVOTS_BEHIND_AXLE_MM`], per later view): `None`
     /// while the search goes on, then its answer (the same as
     /// [`locate`]'s). A step ends at its pass's end.
     pub fn step(&mut self, arena: &Arena, scores: u32) -> Option<Result<Fix, LocateError>> {
@@ -263,14 +267,18 @@ impl Search {
         if let Some(mut fix) = fix_from(&self.sums, &self.gather, views) {
             fix.compass_steps = u8::try_from(self.heading_try.div_ceil(2)).unwrap_or(u8::MAX);
             fix.unexplained = u8::try_from(self.allowed).unwrap_or(u8::MAX);
-            fix.untrusted = fix.compass_steps > 0 || (self.allowed > 0 && fix.points < cfg::MIN_POINTS_WITH_OUTLIER);
+            fix.untrusted = fix.compass_steps > 0
+                || self.allowed > 1
+                || (self.allowed > 0 && fix.points < cfg::MIN_POINTS_WITH_OUTLIER);
             return Some(Ok(fix));
         }
         (self.column, self.row, self.sums, self.gather) = (0, 0, Sums::EMPTY, Gather::EMPTY);
-        // one failed reading (a spurious echo) among many must not hide
-        // the pose the others agree on
-        if self.allowed == 0 && self.readings > cfg::MIN_READINGS_FOR_OUTLIER {
-            self.allowed = 1;
+        // a failed reading (a spurious echo) among many must not hide the
+        // pose the others agree on: one, and one more a further
+        // READINGS_PER_UNEXPLAINED readings
+        let most = (self.readings / cfg::READINGS_PER_UNEXPLAINED).clamp(1, cfg::MAX_UNEXPLAINED);
+        if self.allowed < most && self.readings > cfg::MIN_READINGS_FOR_OUTLIER {
+            self.allowed = self.allowed.saturating_add(1);
             return None;
         }
         self.allowed = 0;
