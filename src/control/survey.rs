@@ -1,7 +1,7 @@
 //! The survey: how the robot finds where it is, on `locate` (and `reset`)
 //! and at power-up ([`config::locate::AT_POWER_UP`]): views taken standing, with turns in
 //! place between them, and the search of the box for the poses that
-//! explain them ([`crate::model::locate`]), a few grid columns per tick.
+//! explain them ([`crate::model::locate`]), a few hundred view scores per tick.
 //!
 //! 1. A view: the compass's heading, the mean of [`config::locate::COMPASS_READINGS`]
 //!    readings, and each lidar's distance, the median of

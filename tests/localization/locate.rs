@@ -359,7 +359,7 @@ fn the_search_finds_the_pose_from_random_starts() {
 /// hundred view scores at a time): the same answer as the search run to the end,
 /// from starts where the compass's heading fits and where it does not.
 #[test]
-fn the_search_a_few_columns_at_a_time_gives_the_same_fix() {
+fn the_search_a_slice_at_a_time_gives_the_same_fix() {
     let mut rng = Rng::new(7);
     let mut steps_seen = Vec::new();
     for start in 0..40 {
