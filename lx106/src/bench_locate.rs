@@ -5,7 +5,7 @@
 //! fits and the search does its usual work once per view count.
 //!
 //! The loop does the search a slice at a time (`Search::step` of
-//! `config::locate::COLUMNS_PER_TICK` columns a tick, while the robot
+//! `config::locate::SCORES_PER_TICK` view scores a tick, while the robot
 //! stands): each slice's count, worst and median over the whole search,
 //! against the 10 ms tick.
 
@@ -13,7 +13,7 @@ use crate::println;
 use crate::rt::count;
 use core::hint::black_box;
 use paperbot::config::geometry::ROTATION_TO_REFERENCE;
-use paperbot::config::locate::COLUMNS_PER_TICK;
+use paperbot::config::locate::SCORES_PER_TICK;
 use paperbot::config::timing::LOOP_HZ;
 use paperbot::math::{mul_q30, Angle};
 use paperbot::model::locate::{locate, Fix, LocateError, Readings, Search};
@@ -99,12 +99,12 @@ pub fn run() {
 }
 
 /// The search as the loop runs it: one `Search::step` of
-/// `COLUMNS_PER_TICK` columns a tick, to its answer.
+/// `SCORES_PER_TICK` view scores a tick, to its answer.
 fn per_tick() {
     println!();
     println!(
-        "### One tick's slice of the search ({} columns, `Search::step`); the tick at {} MHz is {} instructions",
-        COLUMNS_PER_TICK, CLOCK_MHZ, TICK_INSTRUCTIONS
+        "### One tick's slice of the search ({} view scores, `Search::step`); the tick at {} MHz is {} instructions",
+        SCORES_PER_TICK, CLOCK_MHZ, TICK_INSTRUCTIONS
     );
     println!();
     println!("| views | slices (ticks) | worst slice | median slice | worst, share of the tick |");
@@ -120,7 +120,7 @@ fn per_tick() {
         let mut worst = 0u32;
         loop {
             let mut answer = None;
-            let c = count(|| answer = black_box(search.step(&Arena::DEFAULT, black_box(COLUMNS_PER_TICK))));
+            let c = count(|| answer = black_box(search.step(&Arena::DEFAULT, black_box(SCORES_PER_TICK))));
             if let Some(slot) = counts.get_mut(slices) {
                 *slot = c;
             }

@@ -1,7 +1,7 @@
 //! The survey: how the robot finds where it is, on `locate` (and `reset`)
 //! and at power-up ([`config::locate::AT_POWER_UP`]): views taken standing, with turns in
 //! place between them, and the search of the box for the poses that
-//! explain them ([`crate::model::locate`]), a few grid columns per tick.
+//! explain them ([`crate::model::locate`]), a few hundred view scores per tick.
 //!
 //! 1. A view: the compass's heading, the mean of [`config::locate::COMPASS_READINGS`]
 //!    readings, and each lidar's distance, the median of
@@ -12,15 +12,17 @@
 //!    turn moved less than [`config::locate::BLOCKED_TURN_DEG`] (the body against a
 //!    wall), the next turns go the other way.
 //! 3. From [`config::locate::MIN_VIEWS`] views on, the search after each view
-//!    ([`config::locate::COLUMNS_PER_TICK`] columns a tick): a fix that is not
+//!    ([`config::locate::SCORES_PER_TICK`] view scores a tick): a fix that is not
 //!    ambiguous and is certain enough for `goto`
 //!    ([`crate::config::goto::MAX_SIGMA_MM`]) ends the procedure;
 //!    otherwise (ambiguous, too uncertain, or nothing fits) another turn
 //!    and view, up to [`MAX_VIEWS`], whose answer is taken as it is (an
-//!    ambiguous fix says so).
+//!    ambiguous fix says so). A fix of one place the search cannot vouch
+//!    for ([`Fix::untrusted`]: reported uncertain) ends it too: more views
+//!    each bring their own compass error.
 //!
 //! `tests/localization/locate.rs` measures this survey on the realistic simulator's
-//! sensors (99.2 % right from random starts); `tests/localization/localize.rs` runs it
+//! sensors (99.1 % right from random starts, the lab's world); `tests/localization/localize.rs` runs it
 //! in the loop.
 //!
 //! The survey owns no hardware and no clock: the loop hands it the
@@ -241,7 +243,7 @@ impl Survey {
                 self.enter(Phase::View)
             }
             Phase::Settle => Action::Stand,
-            Phase::Search(search) => match search.step(arena, config::locate::COLUMNS_PER_TICK) {
+            Phase::Search(search) => match search.step(arena, config::locate::SCORES_PER_TICK) {
                 None => Action::Stand,
                 Some(result) => self.searched(result.map_err(Failure::from)),
             },

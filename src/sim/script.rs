@@ -107,8 +107,8 @@ const LAP_CORNERS: [(i32, i32); 4] = [(590, 170), (590, 325), (170, 325), (170, 
 /// `config::goto::TURN_MRAD_S`) and the leg at 0.13 m/s (420 mm: 3.2 s;
 /// 155 mm: 1.2 s), with time to spare.
 const LEG_MS: [u64; 4] = [6_000, 4_000, 6_000, 4_000];
-/// Time before the first `goto`, ms: the power-up localization (2.3 s from
-/// the default start, three views) and the estimate's settling on the
+/// Time before the first `goto`, ms: the power-up localization (3.0 s from
+/// the default start, four views) and the estimate's settling on the
 /// lidars and the compass (`goto` refuses an uncertain estimate); a
 /// command during the localization would end it.
 const SETTLE_MS: u64 = 5_000;

@@ -16,8 +16,12 @@
 //!
 //! Measured (lab world): see `lab_world_laps_keep_their_figures`; the hard
 //! world with the multi-hypothesis estimator: docs/simulator.md (median rms
-//! 97.7 mm, 2 runs never located, 16 with collisions; the invariants kept
-//! by the 18 that located).
+//! 36.3 mm, 1 run never located, 18 with collisions, the invariants kept
+//! by the 19 that located; 125.7 mm, 2 never located and 16 before the
+//! lighter secondary hypotheses and the search's pivot and fourth view).
+//! The tracking alone (told the true start) and the hard effects one at a
+//! time are the two ignored tests at the end: docs/simulator.md has their
+//! figures.
 
 use paperbot::config;
 use paperbot::control::TICK_US;
@@ -71,14 +75,25 @@ fn wheels_can_drive_mm(dt_s: f64) -> f64 {
     straight.max(swing) * dt_s
 }
 
-fn laps(realism: Realism, seed: u64) -> Run {
-    let mut robot = SimRobot::new(SimConfig { seed, realism, ..SimConfig::default() });
+/// Where a run's estimate starts.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+enum Start {
+    /// From the power-up localization (the issue's bar).
+    Localized,
+    /// Told the true start pose: the tracking alone.
+    Known,
+}
+
+fn laps(realism: Realism, seed: u64, start: Start) -> Run {
+    let locate_at_power_up = start == Start::Localized;
+    let mut robot = SimRobot::new(SimConfig { seed, realism, locate_at_power_up, ..SimConfig::default() });
     robot.send("rate 0");
     let limit = (config::locate::TIME_LIMIT_MS + 1_000) / 10;
-    let located = (0..limit).any(|_| {
-        robot.tick();
-        robot.take_output().iter().any(|l| l.starts_with("# located "))
-    });
+    let located = !locate_at_power_up
+        || (0..limit).any(|_| {
+            robot.tick();
+            robot.take_output().iter().any(|l| l.starts_with("# located "))
+        });
     if !located {
         return Run::default();
     }
@@ -131,8 +146,8 @@ fn laps(realism: Realism, seed: u64) -> Run {
 
 /// Runs the seeds, prints each and the summary; returns (median RMS,
 /// worst RMS, runs).
-fn world(name: &str, realism: Realism) -> (f64, f64, Vec<Run>) {
-    let runs: Vec<Run> = (1..=SEEDS).map(|seed| laps(realism, seed)).collect();
+fn world(name: &str, realism: Realism, start: Start) -> (f64, f64, Vec<Run>) {
+    let runs: Vec<Run> = (1..=SEEDS).map(|seed| laps(realism, seed, start)).collect();
     for (seed, r) in (1..).zip(&runs) {
         println!(
             "{name} seed {seed:2}: {} rms {:6.1} mm, worst {:6.1} mm; {} collision ticks; standing still moved {:5.1} mm, \
@@ -167,7 +182,7 @@ fn world(name: &str, realism: Realism) -> (f64, f64, Vec<Run>) {
 #[test]
 #[ignore = "issue #29: today's estimator fails the hard world's bars; prints the figures"]
 fn hard_world_laps_meet_the_issues_bars() {
-    let (median, worst, runs) = world("hard", Realism::HARD);
+    let (median, worst, runs) = world("hard", Realism::HARD, Start::Localized);
     assert!(median <= 15.0, "median rms {median:.1} mm");
     assert!(worst <= 50.0, "worst rms {worst:.1} mm");
     assert!(runs.iter().all(|r| r.collisions == 0), "collisions");
@@ -180,9 +195,101 @@ fn hard_world_laps_meet_the_issues_bars() {
 /// runs, up to 22 mm while the servos stood still.)
 #[test]
 fn lab_world_laps_keep_their_figures() {
-    let (median, worst, runs) = world("lab", Realism::LAB);
+    let (median, worst, runs) = world("lab", Realism::LAB, Start::Localized);
     assert!(median <= 5.0, "median rms {median:.1} mm");
     assert!(worst <= 10.0, "worst rms {worst:.1} mm");
     assert!(runs.iter().all(|r| r.located && r.collisions == 0), "never located, or collisions");
     assert!(runs.iter().all(Run::invariants_hold), "invariants");
+}
+
+/// The hard world's tracking alone: each run told its true start pose (no
+/// localization). Prints its figures; the bars are the issue's.
+#[test]
+#[ignore = "issue #29: prints the hard world's tracking figures"]
+fn hard_world_tracking_from_a_known_start() {
+    let (median, worst, runs) = world("hard, known start", Realism::HARD, Start::Known);
+    assert!(median <= 15.0, "median rms {median:.1} mm");
+    assert!(worst <= 50.0, "worst rms {worst:.1} mm");
+    assert!(runs.iter().all(|r| r.collisions == 0), "collisions");
+    assert!(runs.iter().all(Run::invariants_hold), "invariants");
+}
+
+/// The hard world's effects one at a time, tracking from a known start:
+/// the hard world with one effect put back to the lab's, and the lab's
+/// with one effect of the hard world's. Prints the median and worst RMS of
+/// each (docs/simulator.md has the table); asserts nothing but that the
+/// two worlds' ends differ.
+#[test]
+#[ignore = "issue #29: prints which of the hard world's effects the tracking fails on"]
+fn hard_world_effects_one_at_a_time() {
+    let (lab, hard) = (Realism::LAB, Realism::HARD);
+    let variants: [(&str, Realism, Realism); 6] = [
+        ("thin beam", Realism { cone_deg: lab.cone_deg, ..hard }, Realism { cone_deg: hard.cone_deg, ..lab }),
+        (
+            "pivot",
+            Realism { pivot_behind_mm: lab.pivot_behind_mm, pivot_run_mm: lab.pivot_run_mm, ..hard },
+            Realism { pivot_behind_mm: hard.pivot_behind_mm, pivot_run_mm: hard.pivot_run_mm, ..lab },
+        ),
+        (
+            "compass bias",
+            Realism {
+                compass_disturbance_deg: lab.compass_disturbance_deg,
+                compass_wall_deg: lab.compass_wall_deg,
+                ..hard
+            },
+            Realism {
+                compass_disturbance_deg: hard.compass_disturbance_deg,
+                compass_wall_deg: hard.compass_wall_deg,
+                compass_wall_decay_mm: hard.compass_wall_decay_mm,
+                compass_wall_wavelength_mm: hard.compass_wall_wavelength_mm,
+                ..lab
+            },
+        ),
+        (
+            "turn rates",
+            Realism { turn_scale: lab.turn_scale, turn_drift: lab.turn_drift, ..hard },
+            Realism {
+                turn_scale: hard.turn_scale,
+                turn_drift: hard.turn_drift,
+                turn_drift_period_s: hard.turn_drift_period_s,
+                ..lab
+            },
+        ),
+        ("speed", Realism { speed_scale: lab.speed_scale, ..hard }, Realism { speed_scale: hard.speed_scale, ..lab }),
+        (
+            "lidar noise, spurious, corners",
+            Realism {
+                lidar_incidence_noise: lab.lidar_incidence_noise,
+                spurious_rate: lab.spurious_rate,
+                corner_mix_half_deg: lab.corner_mix_half_deg,
+                ..hard
+            },
+            Realism {
+                lidar_incidence_noise: hard.lidar_incidence_noise,
+                spurious_rate: hard.spurious_rate,
+                corner_mix_half_deg: hard.corner_mix_half_deg,
+                ..lab
+            },
+        ),
+    ];
+    let mut table = Vec::new();
+    for (effect, hard_without, lab_with) in variants {
+        let (m1, w1, r1) = world(&format!("hard without {effect}"), hard_without, Start::Known);
+        let (m2, w2, r2) = world(&format!("lab with {effect}"), lab_with, Start::Known);
+        let collided = |runs: &[Run]| runs.iter().filter(|r| r.collisions > 0).count();
+        table.push(format!(
+            "| {effect} | {m1:.1} / {w1:.1} mm, {} collided | {m2:.1} / {w2:.1} mm, {} collided |",
+            collided(&r1),
+            collided(&r2)
+        ));
+    }
+    let (m_lab, ..) = world("lab", lab, Start::Known);
+    let (m_hard, ..) = world("hard", hard, Start::Known);
+    println!("| effect | hard without it (median / worst rms) | lab with it |");
+    println!("| --- | --- | --- |");
+    for row in &table {
+        println!("{row}");
+    }
+    println!("(known start: lab median {m_lab:.1} mm, hard {m_hard:.1} mm)");
+    assert!(m_hard > m_lab, "the hard world is harder");
 }

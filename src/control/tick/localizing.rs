@@ -113,7 +113,8 @@ impl<H: Hardware> Controller<H> {
         }
     }
 
-    /// `# located x y heading sigma sx sy views n [ambiguous]`: mm, degrees.
+    /// `# located x y heading sigma sx sy views n [ambiguous|uncertain]`:
+    /// mm, degrees.
     pub(super) fn report_fix(&mut self, fix: &Fix, views: usize, sink: &mut impl LineSink) {
         let mm = |l: crate::math::Length| l.0 >> 16;
         let o = &mut self.out;
@@ -130,9 +131,20 @@ impl<H: Hardware> Controller<H> {
             .and_then(|()| push_i32(o, mm(fix.sigma_y)))
             .and_then(|()| push_str(o, " mm, views "))
             .and_then(|()| push_u32(o, views as u32))
-            .and_then(|()| push_str(o, if fix.ambiguous { ", ambiguous: more than one place fits" } else { "" }));
+            .and_then(|()| push_str(o, flag_text(fix)));
         if line.is_ok() {
             sink.write_line(o);
         }
+    }
+}
+
+/// What the `# located` line says of a fix the readings do not settle.
+fn flag_text(fix: &Fix) -> &'static str {
+    if fix.ambiguous {
+        ", ambiguous: more than one place fits"
+    } else if fix.untrusted {
+        ", uncertain: the compass is disturbed here or the readings fit poorly"
+    } else {
+        ""
     }
 }

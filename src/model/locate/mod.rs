@@ -31,33 +31,39 @@
 //! hypotheses.
 //!
 //! # Several views
-//! A turn in place keeps the axle and swings the reference point D ahead of
-//! it (the state update's model), so a grid point for the first view is,
-//! after turns, a known point for each later view: a point is consistent
-//! when it explains every view. Views in more directions put beams on walls
+//! A turn in place swings the reference point about a pivot behind the
+//! axle (the skid's drag), at a radius the search does not know: a grid
+//! point for the first view is, after turns, one of a family of points for
+//! each later view, one per pivot tried ([`cfg::PIVOTS_BEHIND_AXLE_MM`],
+//! `view.rs`). A point is consistent when it explains every view with some
+//! pivot; its place is the last view's with the pivot that fits best. Views in more directions put beams on walls
 //! of both axes. A view after a turn that did not happen (a body against a
 //! wall; the compass shows it) is the same view again and adds nothing.
-//! One reading in all may go unexplained (a spurious echo) when nothing
-//! explains them all ([`cfg::MIN_READINGS_FOR_OUTLIER`]).
+//! A reading may go unexplained (a spurious echo) when nothing explains
+//! them all, one more for each [`cfg::READINGS_PER_UNEXPLAINED`] readings
+//! up to [`cfg::MAX_UNEXPLAINED`] ([`cfg::MIN_READINGS_FOR_OUTLIER`]).
 //!
 //! # Cost
-//! Two [`Beam`]s per grid point and view: 153 x 99 points in the team's box
+//! Two [`crate::model::measurement::Beam`]s per grid point and view: 153 x 99 points in the team's box
 //! at 5 mm, about 17.7 million lx106 instructions for one view (0.22 s at 80
-//! MHz, measured by the lx106 benchmarks); a later view is tried only where
-//! the earlier ones fit, and a failed search is repeated at other headings.
-//! The loops are bounded by [`MAX_STEPS`] per axis, [`MAX_VIEWS`] and the
-//! headings tried. [`Search`] does the same work a few grid columns at a
-//! time, so the robot's loop spreads it over its ticks.
+//! MHz, measured by the lx106 benchmarks); a later view is tried, once per
+//! pivot, only where the first fits, and a failed search is repeated at
+//! other headings. The loops are bounded by [`MAX_STEPS`] per axis,
+//! [`MAX_VIEWS`], the pivots and the headings tried. [`Search`] does the
+//! same work a few hundred view scores at a time, so the robot's loop
+//! spreads it over its ticks.
 
 pub mod clusters;
+mod view;
 
 pub use clusters::{Cluster, MAX_CLUSTERS};
 
 use crate::config::locate as cfg;
-use crate::math::{mul_q30, Angle, Coord, Length};
-use crate::model::measurement::{Arena, Beam, LidarId};
+use crate::math::{Angle, Coord, Length};
+use crate::model::measurement::Arena;
 use crate::model::state::Pose;
 use clusters::{Gather, Sums};
+use view::{View, PIVOTS};
 
 /// `cos` of [`cfg::GLANCING_DEG`], Q2.30.
 const GLANCING_NORMAL: i32 =
@@ -83,6 +89,22 @@ pub struct Fix {
     /// [`cfg::AMBIGUOUS_SPAN_MM`] on an axis: they do not say which, or
     /// where along it the robot is.
     pub ambiguous: bool,
+    /// One place fits, but the search cannot vouch for the fix: the
+    /// compass's own heading fitted nowhere (the compass is disturbed
+    /// there, and by how much differs from view to view: issue #29's hard
+    /// world, 5 to 8 degrees between the views of one start, so the
+    /// common offset found says little about the last view's heading), or
+    /// the fit leaves a reading unexplained and rests on fewer than
+    /// [`cfg::MIN_POINTS_WITH_OUTLIER`] grid points (a sliver of the box
+    /// fits: the readings are not what the model expects). Reported as
+    /// uncertain; more views do not help (each brings its own compass
+    /// error).
+    pub untrusted: bool,
+    /// Heading steps ([`cfg::HEADING_STEP_DEG`]) between the fix's heading
+    /// and the compass's: 0 when the compass's own heading fits.
+    pub compass_steps: u8,
+    /// Readings the fix may leave unexplained (its pass's allowance).
+    pub unexplained: u8,
     /// The places, heaviest first: `clusters[..count]` ([`Fix::clusters`]).
     cluster_slots: [Cluster; MAX_CLUSTERS],
     count: u8,
@@ -125,15 +147,15 @@ pub const MAX_VIEWS: usize = 8;
 
 /// Searches `arena` for the poses that explain `views` (see the module
 /// docs), to the end: [`Search`] run until it has its answer. One view, or
-/// several taken in turn with a turn in place between each (the axle
-/// stays, the reference point D ahead of it circles it, as in the state
-/// update). Each turn is the difference of two compass headings, so a
-/// disturbed compass shifts all views alike. A pose must explain every
-/// view; the fix is the last view's pose (where the robot now is). The
-/// turned views' tolerance adds [`cfg::TURN_TOLERANCE_MM`] for a real
-/// turn's pivot off the axle. Views past [`MAX_VIEWS`] are not used. Two
+/// several taken in turn with a turn in place between each (the reference
+/// point circles a pivot behind the axle, tried at each of
+/// [`cfg::PIVOTS_BEHIND_AXLE_MM`]). Each turn is the difference of two
+/// compass headings. A pose must explain every view; the fix is the last
+/// view's pose (where the robot now is). The turned views' tolerance adds
+/// [`cfg::TURN_TOLERANCE_MM`] for the pivot between those tried and a
+/// turn's own spread. Views past [`MAX_VIEWS`] are not used. Two
 /// views can agree on a wrong pose far off; the robot's procedure
-/// (`control::localize`) takes at least three, 45 degrees apart (turning
+/// (`control::localize`) takes at least four, 45 degrees apart (turning
 /// the other way when the compass shows a turn blocked), and more while
 /// the fix is ambiguous.
 ///
@@ -142,16 +164,16 @@ pub const MAX_VIEWS: usize = 8;
 /// [`cfg::HEADING_STEPS`] each way (the compass may be disturbed).
 pub fn locate(arena: &Arena, views: &[Readings]) -> Result<Fix, LocateError> {
     let mut search = Search::new(views)?;
-    // a step of more columns than a grid has ends its pass
+    // a step ends its pass at the latest
     for _ in 0..=Search::MAX_PASSES {
-        if let Some(result) = search.step(arena, MAX_STEPS as u32 + 1) {
+        if let Some(result) = search.step(arena, u32::MAX) {
             return result;
         }
     }
     Err(LocateError::NothingFits)
 }
 
-/// The search of [`locate`] a few grid columns at a time, so the robot's
+/// The search of [`locate`] a few hundred view scores at a time, so the robot's
 /// loop can spread it over its ticks ([`Search::step`]): one pass over the
 /// grid per heading tried (and a second, letting one reading go, when
 /// there are enough readings), the same passes in the same order.
@@ -163,18 +185,21 @@ pub struct Search {
     readings: u32,
     /// The heading tried: 0 the compass's, then 2n - 1 (+n steps), 2n (-n).
     heading_try: u32,
-    /// Readings a point may leave unexplained in this pass (0 or 1).
+    /// Readings a point may leave unexplained in this pass (0 to
+    /// [`cfg::MAX_UNEXPLAINED`]).
     allowed: u32,
-    /// The next grid column of this pass.
+    /// The next grid point of this pass: its column and row.
     column: i32,
+    row: i32,
     /// All the consistent points, and their clusters.
     sums: Sums,
     gather: Gather,
 }
 
 impl Search {
-    /// Passes over the grid at most: two per heading tried.
-    pub const MAX_PASSES: u32 = 2 * (2 * cfg::HEADING_STEPS as u32 + 1);
+    /// Passes over the grid at most: one per heading tried and number of
+    /// readings left unexplained.
+    pub const MAX_PASSES: u32 = (1 + cfg::MAX_UNEXPLAINED) * (2 * cfg::HEADING_STEPS as u32 + 1);
 
     /// A search of `views` (the first [`MAX_VIEWS`]), not started.
     pub fn new(views: &[Readings]) -> Result<Search, LocateError> {
@@ -194,26 +219,44 @@ impl Search {
             heading_try: 0,
             allowed: 0,
             column: 0,
+            row: 0,
             sums: Sums::EMPTY,
             gather: Gather::EMPTY,
         })
     }
 
-    /// Searches up to `columns` more grid columns: `None` while the search
-    /// goes on, then its answer (the same as [`locate`]'s).
-    pub fn step(&mut self, arena: &Arena, columns: u32) -> Option<Result<Fix, LocateError>> {
+    /// Searches on for up to `scores` more view scores (a view's two
+    /// lidar models at a grid point and a pivot: the slice's work, about
+    /// even; a grid point takes one to the pivots tried,
+    /// [`cfg::PIVOTS_BEHIND_AXLE_MM`], per later view): `None`
+    /// while the search goes on, then its answer (the same as
+    /// [`locate`]'s). A step ends at its pass's end.
+    pub fn step(&mut self, arena: &Arena, scores: u32) -> Option<Result<Fix, LocateError>> {
         if self.heading_try > 2 * u32::from(cfg::HEADING_STEPS) {
             return Some(Err(LocateError::NothingFits));
         }
         let views = self.tried(arena);
-        let lx = arena.length_x.0 >> 16;
-        for _ in 0..columns {
-            let x = cfg::GRID_MM.saturating_mul(self.column);
+        let Some(Some(first)) = views.first() else {
+            return Some(Err(LocateError::NoReading));
+        };
+        let (lx, wy) = first.box_mm;
+        let mut work = 0u32;
+        while work < scores {
+            let (x, y) = (cfg::GRID_MM.saturating_mul(self.column), cfg::GRID_MM.saturating_mul(self.row));
             if x > lx || self.column >= MAX_STEPS {
                 return self.pass_done(&views);
             }
-            self.column = self.column.saturating_add(1);
-            search_column(arena, &views, self.allowed, x, &mut self.sums, &mut self.gather);
+            if y > wy || self.row >= MAX_STEPS {
+                (self.column, self.row) = (self.column.saturating_add(1), 0);
+                continue;
+            }
+            self.row = self.row.saturating_add(1);
+            let (at, spent) = search_point(arena, &views, self.allowed, x, y);
+            work = work.saturating_add(spent);
+            if let Some((px, py)) = at {
+                self.sums.add(px, py);
+                self.gather.add(px, py);
+            }
         }
         None
     }
@@ -221,14 +264,21 @@ impl Search {
     /// A pass is over: its fix, or the next pass.
     fn pass_done(&mut self, views: &[Option<View>; MAX_VIEWS]) -> Option<Result<Fix, LocateError>> {
         self.gather.settle();
-        if let Some(fix) = fix_from(&self.sums, &self.gather, views) {
+        if let Some(mut fix) = fix_from(&self.sums, &self.gather, views) {
+            fix.compass_steps = u8::try_from(self.heading_try.div_ceil(2)).unwrap_or(u8::MAX);
+            fix.unexplained = u8::try_from(self.allowed).unwrap_or(u8::MAX);
+            fix.untrusted = fix.compass_steps > 0
+                || self.allowed > 1
+                || (self.allowed > 0 && fix.points < cfg::MIN_POINTS_WITH_OUTLIER);
             return Some(Ok(fix));
         }
-        (self.column, self.sums, self.gather) = (0, Sums::EMPTY, Gather::EMPTY);
-        // one failed reading (a spurious echo) among many must not hide
-        // the pose the others agree on
-        if self.allowed == 0 && self.readings > cfg::MIN_READINGS_FOR_OUTLIER {
-            self.allowed = 1;
+        (self.column, self.row, self.sums, self.gather) = (0, 0, Sums::EMPTY, Gather::EMPTY);
+        // a failed reading (a spurious echo) among many must not hide the
+        // pose the others agree on: one, and one more a further
+        // READINGS_PER_UNEXPLAINED readings
+        let most = (self.readings / cfg::READINGS_PER_UNEXPLAINED).clamp(1, cfg::MAX_UNEXPLAINED);
+        if self.allowed < most && self.readings > cfg::MIN_READINGS_FOR_OUTLIER {
+            self.allowed = self.allowed.saturating_add(1);
             return None;
         }
         self.allowed = 0;
@@ -249,147 +299,66 @@ impl Search {
         };
         for (i, (slot, r)) in tried.iter_mut().zip(views).enumerate() {
             let heading = shifted(r);
-            let (offset, tol) = if i == 0 {
-                ((0, 0), cfg::TOLERANCE_MM)
-            } else {
-                (turn_offset(shifted(first), heading), cfg::TOLERANCE_MM + cfg::TURN_TOLERANCE_MM)
-            };
-            *slot = Some(View::new(arena, &Readings { heading, ..*r }, offset, tol));
+            let tol = if i == 0 { cfg::TOLERANCE_MM } else { cfg::TOLERANCE_MM + cfg::TURN_TOLERANCE_MM };
+            *slot = Some(View::new(arena, &Readings { heading, ..*r }, shifted(first), tol));
         }
         tried
     }
 }
 
-/// How far a turn in place from heading `from` to `to` moves the reference
-/// point, whole mm: `D (cos to - cos from, sin to - sin from)`.
-fn turn_offset(from: Angle, to: Angle) -> (i32, i32) {
-    let d = crate::config::geometry::ROTATION_TO_REFERENCE.0;
-    let (s0, c0) = Pose::from_mm(0, 0, from).sin_cos();
-    let (s1, c1) = Pose::from_mm(0, 0, to).sin_cos();
-    let dx = mul_q30(d, c1).saturating_sub(mul_q30(d, c0)) >> 16;
-    let dy = mul_q30(d, s1).saturating_sub(mul_q30(d, s0)) >> 16;
-    (dx, dy)
-}
-
-/// One view as the search tries it: its readings, where its reference
-/// point is from the grid point (whole mm), and its lidars' offsets.
-#[derive(Clone, Copy)]
-struct View {
-    pose: Pose,
-    front: Option<Length>,
-    right: Option<Length>,
-    offset: (i32, i32),
-    lidars: [(i32, i32); 2],
-    tol: Length,
-    box_mm: (i32, i32),
-}
-
-impl View {
-    fn new(arena: &Arena, r: &Readings, offset: (i32, i32), tol_mm: f64) -> View {
-        let mut pose = Pose::from_mm(0, 0, r.heading);
-        let (s, c) = pose.sin_cos();
-        // each lidar's offset from the reference point in the box, mm
-        let lidar = |id: LidarId| {
-            let m = id.mount();
-            let dx = mul_q30(m.forward.0, c).saturating_sub(mul_q30(m.right.0, s)) >> 16;
-            let dy = mul_q30(m.forward.0, s).saturating_add(mul_q30(m.right.0, c)) >> 16;
-            (dx, dy)
-        };
-        View {
-            pose,
-            front: r.front,
-            right: r.right,
-            offset,
-            lidars: [lidar(LidarId::Front), lidar(LidarId::Right)],
-            tol: Length::from_mm_f64(tol_mm),
-            box_mm: (arena.length_x.0 >> 16, arena.width_y.0 >> 16),
-        }
-    }
-
-    /// How many of this view's readings the grid point (x, y) does not
-    /// explain (within the tolerance of the model's), and how many it does
-    /// (a glancing beam's reading is neither), or `None` when the body does
-    /// not fit in the box there.
-    fn misses(&self, arena: &Arena, x: i32, y: i32) -> Option<(u32, u32)> {
-        let (x, y) = (x.saturating_add(self.offset.0), y.saturating_add(self.offset.1));
-        let (lx, wy) = self.box_mm;
-        let inside = |o: &(i32, i32)| {
-            let (px, py) = (x.saturating_add(o.0), y.saturating_add(o.1));
-            px >= 0 && px <= lx && py >= 0 && py <= wy
-        };
-        if !self.lidars.iter().all(inside) {
-            return None;
-        }
-        let mut pose = self.pose;
-        pose.x = Coord::from_length(Length::from_mm(x));
-        pose.y = Coord::from_length(Length::from_mm(y));
-        // (missed, explained)
-        let fits = |id: LidarId, z: Option<Length>| match z {
-            None => (0, 0),
-            Some(z) => {
-                let beam = Beam::new(arena, &pose, &id.mount());
-                // a beam this glancing may fail or lie: its reading says
-                // nothing about this point
-                if !beam.square_enough(GLANCING_NORMAL) {
-                    (0, 0)
-                } else if beam.normal_miss(z).0.saturating_abs() <= mul_q30(self.tol.0, beam.cone_normal) {
-                    (0, 1)
-                } else {
-                    (1, 0)
-                }
-            }
-        };
-        let (front, right) = (fits(LidarId::Front, self.front), fits(LidarId::Right, self.right));
-        Some((front.0 + right.0, front.1 + right.1))
-    }
-}
-
-/// One grid column (the first view's reference point at `x`): a point must
-/// fit the body in the box in every view, explain all the views' readings
-/// but `allowed`, and explain at least one.
-fn search_column(
+/// One grid point (the first view's reference point at (x, y)): where the
+/// last view's reference point is, when the point fits the body in the box
+/// in every view, explains all the views' readings but `allowed` and at
+/// least one, with some pivot (the best fitting one, [`view`]); and the
+/// view scores it took (the slice's work).
+fn search_point(
     arena: &Arena,
     views: &[Option<View>; MAX_VIEWS],
     allowed: u32,
     x: i32,
-    sums: &mut Sums,
-    gather: &mut Gather,
-) {
+    y: i32,
+) -> (Option<(i32, i32)>, u32) {
     let Some(Some(first)) = views.first() else {
-        return;
+        return (None, 0);
     };
-    let wy = first.box_mm.1;
-    for j in 0..MAX_STEPS {
-        let y = cfg::GRID_MM.saturating_mul(j);
-        if y > wy {
-            break;
-        }
-        // (missed, explained) over the views so far
-        let mut counts = Some((0u32, 0u32));
-        for v in views.iter().flatten() {
-            counts = counts
-                .zip(v.misses(arena, x, y))
-                .map(|((m, e), (vm, ve))| (m.saturating_add(vm), e.saturating_add(ve)))
-                .filter(|&(m, _)| m <= allowed);
-            if counts.is_none() {
+    let mut work = 1u32;
+    let Some(base) = first.score(arena, x, y, 0).filter(|s| s.missed <= allowed) else {
+        return (None, work);
+    };
+    let later = views.get(1..).unwrap_or(&[]);
+    let Some(last) = later.iter().flatten().last() else {
+        return ((base.explained > 0).then_some((x, y)), work);
+    };
+    // (cost, pivot) of the best pivot: each further one in the config's
+    // list costs a little more (the nearer the lab's, the likelier)
+    let prior = Length::from_mm_f64(cfg::PIVOT_PRIOR_MM).0.max(0) as u32;
+    let mut best: Option<(u32, usize)> = None;
+    for pivot in 0..PIVOTS {
+        let mut total = Some(base);
+        for v in later.iter().flatten() {
+            work = work.saturating_add(1);
+            total = total.zip(v.score(arena, x, y, pivot)).map(|(t, s)| t.add(s)).filter(|t| t.missed <= allowed);
+            if total.is_none() {
                 break;
             }
         }
-        if counts.is_some_and(|(_, explained)| explained > 0) {
-            sums.add(x, y);
-            gather.add(x, y);
+        if let Some(t) = total.filter(|t| t.explained > 0) {
+            let cost = t.cost.saturating_add(prior.saturating_mul(pivot as u32));
+            if best.is_none_or(|(c, _)| cost < c) {
+                best = Some((cost, pivot));
+            }
         }
     }
+    (best.map(|(_, pivot)| last.at(x, y, pivot)), work)
 }
 
 /// The fix from a pass's consistent points and their settled clusters
-/// (none: no fix); the poses are the last view's.
+/// (none: no fix), the last view's places.
 fn fix_from(sums: &Sums, gather: &Gather, views: &[Option<View>; MAX_VIEWS]) -> Option<Fix> {
     let last = views.iter().flatten().last()?;
     let (_, sigma_x, sigma_y) = sums.stats()?;
-    let (ox, oy) = (i64::from(last.offset.0) << 8, i64::from(last.offset.1) << 8);
-    // a mean in 1/256 mm of the first view's point -> the last view's
-    let at = |m: i64, o: i64| Coord::from_length(Length(((m + o) << 8) as i32));
+    // a mean in 1/256 mm (of the last view's points) -> Q16
+    let at = |m: i64| Coord::from_length(Length((m << 8) as i32));
     let empty = Cluster { x: last.pose.x, y: last.pose.y, sigma_x, sigma_y, weight: 0, points: 0 };
     let mut slots = [empty; MAX_CLUSTERS];
     let mut count = 0u8;
@@ -397,7 +366,7 @@ fn fix_from(sums: &Sums, gather: &Gather, views: &[Option<View>; MAX_VIEWS]) -> 
         let Some((mean, sx, sy)) = c.stats() else { continue };
         let weight = crate::math::div_i64(i64::from(c.n) << 16, i64::from(sums.n)).unwrap_or(0) as u32;
         let (mx, my) = mean;
-        *slot = Cluster { x: at(mx, ox), y: at(my, oy), sigma_x: sx, sigma_y: sy, weight, points: c.n };
+        *slot = Cluster { x: at(mx), y: at(my), sigma_x: sx, sigma_y: sy, weight, points: c.n };
         count = count.saturating_add(1);
     }
     let first = gather.clusters().next()?;
@@ -407,6 +376,9 @@ fn fix_from(sums: &Sums, gather: &Gather, views: &[Option<View>; MAX_VIEWS]) -> 
         sigma_y,
         points: sums.n,
         ambiguous: gather.clusters().nth(1).is_some() || first.wide(),
+        untrusted: false,
+        compass_steps: 0,
+        unexplained: 0,
         cluster_slots: slots,
         count,
     })
