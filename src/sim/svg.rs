@@ -122,18 +122,7 @@ pub fn render_with_stretches(
         if t.poses.is_empty() {
             continue;
         }
-        let mut pts = String::new();
-        for p in t.poses {
-            let (x, y) = px(p);
-            let _ = write!(pts, "{x:.1},{y:.1} ");
-        }
-        let dash = if t.dashed { r#" stroke-dasharray="6 4""# } else { "" };
-        let _ = writeln!(
-            s,
-            r#"<polyline points="{}" fill="none" stroke="{}" stroke-width="1.5"{dash}/>"#,
-            pts.trim_end(),
-            t.color
-        );
+        polyline(&mut s, t.poses.iter().map(&px), t.color, 1.5, t.dashed.then_some("6 4"));
         for (p, fill) in [(t.poses.first(), "white"), (t.poses.last(), t.color)] {
             let Some(p) = p else { continue };
             let (x, y) = px(p);
@@ -147,18 +136,7 @@ pub fn render_with_stretches(
         }
     }
     for st in stretches {
-        let mut pts = String::new();
-        for p in st.poses {
-            let (x, y) = px(p);
-            let _ = write!(pts, "{x:.1},{y:.1} ");
-        }
-        let dash = if st.dashed { r#" stroke-dasharray="3 3""# } else { "" };
-        let _ = writeln!(
-            s,
-            r#"<polyline points="{}" fill="none" stroke="{}" stroke-width="3"{dash}/>"#,
-            pts.trim_end(),
-            st.color
-        );
+        polyline(&mut s, st.poses.iter().map(&px), st.color, 3.0, st.dashed.then_some("3 3"));
     }
     let mut ly = MARGIN + arena.length_x_mm() + MARGIN * 0.5 + LEGEND_ROW;
     let rows = tracks.iter().map(|t| (t.label, t.color, t.dashed, "2", "6 4"));
@@ -197,4 +175,17 @@ fn arena_line(arena: &Arena) -> String {
 
 fn escape(t: &str) -> String {
     t.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;")
+}
+
+/// A `<polyline>` through `points` (svg coordinates), dashed when asked.
+fn polyline(s: &mut String, points: impl Iterator<Item = (f64, f64)>, color: &str, width: f64, dash: Option<&str>) {
+    let mut pts = String::new();
+    for (x, y) in points {
+        let _ = write!(pts, "{x:.1},{y:.1} ");
+    }
+    let _ = write!(s, r#"<polyline points="{}" fill="none" stroke="{color}" stroke-width="{width}""#, pts.trim_end());
+    if let Some(d) = dash {
+        let _ = write!(s, r#" stroke-dasharray="{d}""#);
+    }
+    let _ = writeln!(s, "/>");
 }

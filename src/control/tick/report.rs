@@ -8,10 +8,10 @@ use super::clock::{reached, Stamp};
 use super::{Controller, Hardware, LineSink};
 use crate::config;
 use crate::control::log::RowLog;
-use crate::control::protocol::number::{push_hex, push_str, push_u32};
+use crate::control::protocol::number::{push_str, push_u32};
 use crate::control::protocol::{format_row, format_telemetry, telemetry_header, Telemetry, TelemetryRow};
 use crate::control::settings::kept_log::KeptLog;
-use crate::control::settings::{Refusal, SettingsStore};
+use crate::control::settings::SettingsStore;
 use crate::math::div_u64;
 
 /// Rows at a rate: telemetry's, or the on-board log's.
@@ -184,14 +184,8 @@ impl<H: Hardware> Controller<H> {
                 return None;
             }
         };
-        for (slot, refusal) in config::settings::LOG_SLOTS.iter().zip(found.refused) {
-            let Some(refusal) = refusal.filter(|r| *r != Refusal::Blank) else { continue };
-            self.say(sink, |o| {
-                push_str(o, "# kept log at ")?;
-                push_hex(o, *slot)?;
-                push_str(o, " ignored: ")?;
-                push_str(o, refusal.reason())
-            });
+        for (&slot, refusal) in config::settings::LOG_SLOTS.iter().zip(found.refused) {
+            self.say_ignored(sink, "# kept log at ", slot, refusal, config::settings::LOG_VERSION);
         }
         found.newest
     }

@@ -119,21 +119,8 @@ impl<H: Hardware> Controller<H> {
                 return;
             }
         };
-        for (sector, refusal) in config::settings::SECTORS.iter().zip(loaded.refused) {
-            let Some(refusal) = refusal.filter(|r| *r != Refusal::Blank) else { continue };
-            self.say(sink, |o| {
-                push_str(o, "# settings at ")?;
-                push_hex(o, *sector)?;
-                push_str(o, " ignored: ")?;
-                push_str(o, refusal.reason())?;
-                if let Refusal::OtherVersion(v) = refusal {
-                    push_str(o, " ")?;
-                    push_u32(o, v)?;
-                    push_str(o, " not ")?;
-                    push_u32(o, config::settings::VERSION)?;
-                }
-                Ok(())
-            });
+        for (&sector, refusal) in config::settings::SECTORS.iter().zip(loaded.refused) {
+            self.say_ignored(sink, "# settings at ", sector, refusal, config::settings::VERSION);
         }
         match loaded.newest {
             Some((settings, sequence)) => {
@@ -279,6 +266,33 @@ impl<H: Hardware> Controller<H> {
             push_str(o, "): ")?;
             push_u32(o, s.mission.len() as u32)?; // <= MAX_STEPS
             push_str(o, " steps")
+        });
+    }
+
+    /// `<what><addr> ignored: <reason>` for what a flash sector holds in
+    /// place of a record or a log this firmware takes (nothing for an
+    /// erased one); another version is named against `version`.
+    pub(super) fn say_ignored(
+        &mut self,
+        sink: &mut impl LineSink,
+        what: &str,
+        addr: u32,
+        refusal: Option<Refusal>,
+        version: u32,
+    ) {
+        let Some(refusal) = refusal.filter(|r| *r != Refusal::Blank) else { return };
+        self.say(sink, |o| {
+            push_str(o, what)?;
+            push_hex(o, addr)?;
+            push_str(o, " ignored: ")?;
+            push_str(o, refusal.reason())?;
+            if let Refusal::OtherVersion(v) = refusal {
+                push_str(o, " ")?;
+                push_u32(o, v)?;
+                push_str(o, " not ")?;
+                push_u32(o, version)?;
+            }
+            Ok(())
         });
     }
 
