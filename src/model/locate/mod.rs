@@ -71,6 +71,13 @@ const GLANCING_NORMAL: i32 =
 
 /// Grid points per axis at most (a 2 m box at 5 mm).
 pub const MAX_STEPS: i32 = 400;
+/// The config's tolerances and pivot prior as lengths, and the heading
+/// step as an angle, evaluated by the compiler (no float on the robot).
+const TOLERANCE: Length = Length::from_mm_f64(cfg::TOLERANCE_MM);
+const TURNED_TOLERANCE: Length = Length::from_mm_f64(cfg::TOLERANCE_MM + cfg::TURN_TOLERANCE_MM);
+const PIVOT_PRIOR: u32 = Length::from_mm_f64(cfg::PIVOT_PRIOR_MM).0 as u32;
+const HEADING_STEP: Angle = Angle::from_degrees_f64(cfg::HEADING_STEP_DEG);
+const _: () = assert!(Length::from_mm_f64(cfg::PIVOT_PRIOR_MM).0 >= 0);
 
 /// Where the search put the robot.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
@@ -290,7 +297,7 @@ impl Search {
     /// whole heading steps (a disturbed compass), alternately up and down.
     fn tried(&self, arena: &Arena) -> [Option<View>; MAX_VIEWS] {
         let k = self.heading_try;
-        let off = Angle(Angle::from_degrees_f64(cfg::HEADING_STEP_DEG).0.wrapping_mul(k.div_ceil(2)));
+        let off = Angle(HEADING_STEP.0.wrapping_mul(k.div_ceil(2)));
         let shifted = |r: &Readings| if k % 2 == 1 { r.heading.wrapping_add(off) } else { r.heading.wrapping_sub(off) };
         let views = self.views.get(..self.count).unwrap_or(&[]);
         let mut tried: [Option<View>; MAX_VIEWS] = [None; MAX_VIEWS];
@@ -299,7 +306,7 @@ impl Search {
         };
         for (i, (slot, r)) in tried.iter_mut().zip(views).enumerate() {
             let heading = shifted(r);
-            let tol = if i == 0 { cfg::TOLERANCE_MM } else { cfg::TOLERANCE_MM + cfg::TURN_TOLERANCE_MM };
+            let tol = if i == 0 { TOLERANCE } else { TURNED_TOLERANCE };
             *slot = Some(View::new(arena, &Readings { heading, ..*r }, shifted(first), tol));
         }
         tried
@@ -331,7 +338,7 @@ fn search_point(
     };
     // (cost, pivot) of the best pivot: each further one in the config's
     // list costs a little more (the nearer the lab's, the likelier)
-    let prior = Length::from_mm_f64(cfg::PIVOT_PRIOR_MM).0.max(0) as u32;
+    let prior = PIVOT_PRIOR;
     let mut best: Option<(u32, usize)> = None;
     for pivot in 0..PIVOTS {
         let mut total = Some(base);

@@ -63,7 +63,7 @@ impl View {
     /// `r` (its heading the one tried), taken after turns in place from the
     /// first view's heading `first` (`r`'s own for the first view), with
     /// the tolerance `tol_mm`.
-    pub fn new(arena: &Arena, r: &Readings, first: Angle, tol_mm: f64) -> View {
+    pub fn new(arena: &Arena, r: &Readings, first: Angle, tol: Length) -> View {
         let pose = Pose::from_mm(0, 0, r.heading);
         let (s, c) = { pose }.sin_cos();
         let (s0, c0) = Pose::from_mm(0, 0, first).sin_cos();
@@ -88,7 +88,7 @@ impl View {
             right: r.right,
             offsets,
             lidars: [lidar(LidarId::Front), lidar(LidarId::Right)],
-            tol: Length::from_mm_f64(tol_mm),
+            tol,
             box_mm: (arena.length_x.0 >> 16, arena.width_y.0 >> 16),
         }
     }
