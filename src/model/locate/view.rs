@@ -62,7 +62,7 @@ pub(super) struct View {
 impl View {
     /// `r` (its heading the one tried), taken after turns in place from the
     /// first view's heading `first` (`r`'s own for the first view), with
-    /// the tolerance `tol_mm`.
+    /// the tolerance `tol`.
     pub fn new(arena: &Arena, r: &Readings, first: Angle, tol: Length) -> View {
         let pose = Pose::from_mm(0, 0, r.heading);
         let (s, c) = { pose }.sin_cos();
