@@ -101,6 +101,8 @@ pub(super) trait Sample {
         Self: Sized;
 }
 
+// tick bar: the samples' accessors inlined into `SensorSlot::polled` (on
+// the bar's tick), as it is (lx106/BENCHMARKS.md, "Control tick")
 impl Sample for LidarSample {
     type Reading = Length;
     #[inline(always)]

@@ -159,6 +159,9 @@ impl Filter {
     /// for innovation `nu` (Q16 mm), row `h` (on `x`, `y`, `theta` only),
     /// noise `r` (Q12 mm^2, `0 < r <= P_MAX`), gated; the same arithmetic
     /// on three states. Returns the outcome and the repairs made.
+    // tick bar (four hypotheses): the gate and scaling are written out as
+    // in `Filter::correct`, not shared: one inlined helper for both cost
+    // 181 instructions (15,026 of the 15,000 bar, measured)
     pub(super) fn correct_pose(&mut self, h: Row, nu: i32, r: i32, bounds: &Bounds) -> (Outcome, u32) {
         self.pay();
         let (b, hph, k) = project_pose(&self.p, h);
@@ -261,6 +264,7 @@ impl Covariance {
         self.less(T, T, shift(mul_hi(t2.abs(), b2.abs()), e));
     }
 
+    // tick bar (four hypotheses): inlined, as `Covariance::get` and kin
     #[inline(always)]
     fn less(&mut self, i: usize, j: usize, d: i32) {
         self.set(i, j, self.get(i, j).saturating_sub(d));
@@ -274,6 +278,7 @@ impl Covariance {
         self.keep_variance(T);
     }
 
+    // tick bar (four hypotheses): inlined, as `Covariance::get` and kin
     #[inline(always)]
     fn keep_variance(&mut self, i: usize) {
         if self.get(i, i) > P_MAX {
@@ -291,6 +296,7 @@ impl Covariance {
         self.bound(X, Y) + self.bound(X, T) + self.bound(Y, T)
     }
 
+    // tick bar (four hypotheses): inlined, as `Covariance::get` and kin
     #[inline(always)]
     fn bound(&mut self, i: usize, j: usize) -> u32 {
         let mut pij = self.get(i, j);
