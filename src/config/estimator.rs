@@ -32,6 +32,38 @@ pub const TURN_CORRELATION_DEG: f64 = 90.0;
 /// follows the lidars instead of gating them out. The simulator's pivot
 /// (`sim::PIVOT_BEHIND_AXLE_MM` and its spread) lies within it.
 pub const PIVOT_SIGMA_MM: f64 = 12.0;
+/// Where a turn in place pivots is learned too (issue 29,
+/// `model::estimator::pivot`): its distance behind the axle starts at 0
+/// (about the axle, the lab's model) with this uncertainty, one sigma, mm.
+/// Real skids drag the pivot tens of mm behind the axle (the hard
+/// simulator's 60 +- 20 mm per run).
+pub const PIVOT_STATE_SIGMA_MM: f64 = 40.0;
+/// The learned pivot's bounds, mm behind the axle (ahead: negative): the
+/// hard simulator's 60 +- 20 mm and its turn-to-turn spread inside. With
+/// `geometry::ROTATION_TO_REFERENCE` their sum stays below 256 mm, which
+/// the turn's Jacobian is sized for.
+pub const PIVOT_MIN_MM: f64 = -20.0;
+pub const PIVOT_MAX_MM: f64 = 110.0;
+/// The learned pivot's random walk, mm^2 per second (it changes with the
+/// floor and the battery, slowly): 1 mm after 100 s.
+pub const PIVOT_WALK_MM2_PER_S: f64 = 0.01;
+/// A turn teaches the pivot once this long has passed since its last
+/// turning step, ms: the lidars' first readings after it (30 Hz, two
+/// lidars) have corrected where it left the robot.
+pub const PIVOT_SETTLE_MS: u32 = 300;
+/// A turn teaches the pivot only if the lidars corrected the leading
+/// hypothesis at least this often while it turned and settled (two lidars
+/// at 30 Hz: a fifth of a second of readings); a turn the lidars did not
+/// see (a localization's: its readings go to the search) teaches nothing.
+pub const PIVOT_MIN_CORRECTIONS: u32 = 12;
+/// Turns smaller than this teach nothing, degrees: their chord is short
+/// against the corrections' noise.
+pub const PIVOT_MIN_TURN_DEG: f64 = 30.0;
+/// One sigma of what a turn's corrections along its chord carry besides
+/// the pivot's error (the lidars' noise over the turn's readings, the
+/// heading's share), mm: over the chord (1.4 for a quarter turn) the
+/// sample's sigma.
+pub const PIVOT_SAMPLE_SIGMA_MM: f64 = 6.0;
 /// Extra position noise always added, mm^2 per second: keeps the
 /// covariance a margin away from singular (a turn's noise is rank one)
 /// and from collapsing while the robot stands still; 0.7 mm after a

@@ -5,7 +5,8 @@
 //! error, wall collisions, and the invariants: while the servos stand
 //! still the reported position moves at most 10 mm; between consecutive
 //! telemetry rows (10 Hz) it never moves more than the wheels can drive
-//! plus 25 mm; every reported pose lies in the box. Samples taken while
+//! (the reference point swinging about the run's pivot at the fastest
+//! turn) plus 25 mm; every reported pose lies in the box. Samples taken while
 //! the robot localizes do not count (it claims no pose then).
 //!
 //! The lab's world is asserted (its figures must not get worse); the hard
@@ -67,9 +68,11 @@ impl Run {
 }
 
 /// What the wheels can drive in `dt_s`, mm: the protocol's fastest straight
-/// speed, or the reference point's swing at the fastest turn rate.
-fn wheels_can_drive_mm(dt_s: f64) -> f64 {
-    let d = config::geometry::ROTATION_TO_REFERENCE.to_mm_f64();
+/// speed, or the reference point's swing at the fastest turn rate about a
+/// pivot `pivot_mm` behind the axle (the run's: the reference point is D +
+/// pivot from it).
+fn wheels_can_drive_mm(dt_s: f64, pivot_mm: f64) -> f64 {
+    let d = config::geometry::ROTATION_TO_REFERENCE.to_mm_f64() + pivot_mm.max(0.0);
     let straight = f64::from(config::serial::MAX_SPEED_MM_S);
     let swing = d * f64::from(config::serial::MAX_TURN_MRAD_S) / 1000.0;
     straight.max(swing) * dt_s
@@ -101,7 +104,9 @@ fn laps(realism: Realism, seed: u64, start: Start) -> Run {
     let script = Script::parse(&default_script(duration_us as f64 / 1e6)).unwrap();
     let stop = robot.controller().model().stop();
     let (lx, wy) = (robot.cfg.arena.length_x_mm(), robot.cfg.arena.width_y_mm());
-    let allowed = wheels_can_drive_mm(ROW_TICKS as f64 * f64::from(TICK_US) * 1e-6);
+    // the run's pivot, with its turn-to-turn spread (two sigma)
+    let pivot = realism.pivot_behind_mm + robot.drawn().pivot_offset_mm + 2.0 * realism.pivot_spread_mm;
+    let allowed = wheels_can_drive_mm(ROW_TICKS as f64 * f64::from(TICK_US) * 1e-6, pivot);
     let mut run = Run { located: true, step_excess_mm: f64::MIN, ..Run::default() };
     let (mut sum_sq, mut n) = (0.0, 0u64);
     let mut standing_since: Option<PoseF64> = None;

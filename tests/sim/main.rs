@@ -6,6 +6,7 @@
 mod common;
 
 mod hard_world;
+mod pivot;
 mod realism;
 mod realistic_hour;
 mod simulate;

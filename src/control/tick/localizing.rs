@@ -98,7 +98,7 @@ impl<H: Hardware> Controller<H> {
                 }
             }
             Err(why) => {
-                self.estimator.reset(self.estimator.pose());
+                self.estimator.lose_place(self.estimator.pose());
                 self.out.clear();
                 let line = push_str(&mut self.out, "# locate failed: ")
                     .and_then(|()| push_str(&mut self.out, why.text()))

@@ -82,12 +82,6 @@ pub(super) const SCALE_WALK: u32 = per_us(scale_var(cfg::SCALE_WALK_PER_SQRT_S))
 pub(super) const BIAS_WALK: u32 = per_us(angle_var(1.0) * cfg::COMPASS_BIAS_WALK_DEG2_PER_S);
 /// D / L in Q31 (D < 128 mm by the config's assert, so D / L < 1/2).
 pub(super) const D_OVER_L_Q31: i32 = to_i32(geometry::ROTATION_TO_REFERENCE.0 as f64 / 65536.0 / L * 2_147_483_648.0);
-/// (D / L)^2 in Q30: how much of a turned angle's noise reaches a
-/// secondary hypothesis's position (`light::Shared`).
-pub(super) const D_OVER_L_SQ_Q30: i32 = {
-    let d = geometry::ROTATION_TO_REFERENCE.0 as f64 / 65536.0 / L;
-    to_i32(d * d * 1_073_741_824.0)
-};
 /// A secondary's share of the leader's speed-scale variance per distance
 /// driven: `Lc / L^2` per mm as a factor for `mul_hi(|d| in Q24 mm, .)`
 /// giving Q30 (`Lc / L^2 2^30 2^32 / 2^24`; see `light::Shared`).
@@ -102,6 +96,13 @@ pub(super) const P0_HEADING: i32 = to_i32(angle_var(cfg::INITIAL_SIGMA_DEG));
 pub(super) const P0_SPEED: i32 = to_i32(scale_var(cfg::SPEED_SCALE_SIGMA));
 pub(super) const P0_TURN: i32 = to_i32(scale_var(cfg::TURN_SCALE_SIGMA));
 pub(super) const P0_BIAS: i32 = to_i32(angle_var(cfg::COMPASS_BIAS_SIGMA_DEG));
+pub(super) const P0_PIVOT: i32 = to_i32(cfg::PIVOT_STATE_SIGMA_MM * cfg::PIVOT_STATE_SIGMA_MM * Q12);
+pub(super) const PIVOT_WALK: u32 = per_us(cfg::PIVOT_WALK_MM2_PER_S * Q12);
+pub(super) const PIVOT_SAMPLE_VAR: i32 = to_i32(cfg::PIVOT_SAMPLE_SIGMA_MM * cfg::PIVOT_SAMPLE_SIGMA_MM * Q12);
+pub(super) const PIVOT_SETTLE_US: u32 = cfg::PIVOT_SETTLE_MS * 1000;
+/// The learned pivot's bounds, Q16 mm.
+pub(super) const PIVOT_MIN_Q16: i32 = to_i32(cfg::PIVOT_MIN_MM * 65536.0);
+pub(super) const PIVOT_MAX_Q16: i32 = to_i32(cfg::PIVOT_MAX_MM * 65536.0);
 /// A lidar's local re-search: the new hypothesis's position variance.
 pub(super) const P_RESEARCH: i32 = to_i32(cfg::RESEARCH_SIGMA_MM * cfg::RESEARCH_SIGMA_MM * Q12);
 /// The scales' bounds and 1, Q29.
@@ -158,13 +159,23 @@ const _: () = {
     // 65.5 mm (the speed's share below 1/2 in Q30) and turns at most 1.3
     // rad (the turn's below 4 in Q27; times a variance below 2^28, << 5
     // stays below 2^31)
-    assert!(D_OVER_L_SQ_Q30 >= 0 && D_OVER_L_SQ_Q30 < (1 << 30));
     assert!(SPEED_SHARE_Q30 > 0 && (SPEED_SHARE_Q30 as f64) * 65.6 / 256.0 < (1u32 << 29) as f64);
     assert!(TURN_SHARE_Q27 > 0 && (TURN_SHARE_Q27 as f64) * 1.4 / TAU < (1u32 << 29) as f64);
     assert!(MIN_NORMAL > (1 << 26) && MIN_NORMAL <= (1 << 30));
     assert!(P_MIN > 0 && P_MIN < P_MAX && P_MAX <= (1 << 28));
     assert!(P0_POS <= P_MAX && P0_HEADING <= P_MAX && P0_SPEED <= P_MAX && P0_TURN <= P_MAX && P0_BIAS <= P_MAX);
     assert!(P_RESEARCH > P_MIN && P_RESEARCH <= P_MAX);
+    assert!(P0_PIVOT > 0 && P0_PIVOT <= P_MAX && (PIVOT_WALK as u64) * 65_535 < (1 << 32));
+    assert!(PIVOT_SAMPLE_VAR > 0 && PIVOT_SAMPLE_VAR <= P_MAX);
+    // the turn's lever D + pivot within (0, 256) mm: (D + pivot) / L below
+    // 1 in Q31 (`predict::lever_over_l`), the pivot Q16 << 7 being Q31 / L
+    // for L = 256 mm; a step's Jacobian entries (D + p)/L times the sine's
+    // change (below 0.2 rad a step) stay far below the shear's 1/2, G's
+    // position entries below 1 (Q30)
+    assert!(L == 256.0);
+    assert!(PIVOT_MIN_Q16 < 0 && PIVOT_MAX_Q16 > 0);
+    assert!(D_OVER_L_Q31 as i64 + ((PIVOT_MIN_Q16 as i64) << 7) > 0);
+    assert!(D_OVER_L_Q31 as i64 + ((PIVOT_MAX_Q16 as i64) << 7) < (1 << 31) - (1 << 27));
     // a step's turn is below 2^30 LSB (TurnRate::MAX over Dt::MAX, 1.3 rad):
     // mul_hi by a factor below 2^31 gives below 2^29. The pivot's noise is
     // its own term: 45 mm one sigma (issue 29: the pivot 60 +- 20 mm behind

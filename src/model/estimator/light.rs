@@ -15,10 +15,11 @@
 //! the pose block. See `docs/estimator.md`, "The budget".
 
 use super::constants::{
-    D_OVER_L_Q31, D_OVER_L_SQ_Q30, FLOOR_HEADING, FLOOR_POS, K_DIST, K_DRIFT, K_PIVOT, K_TURN, P_MAX, P_MIN, R_COMPASS,
-    SPEED_SHARE_Q30, TILDE_Q16_PER_LSB, TURN_SHARE_Q27,
+    FLOOR_HEADING, FLOOR_POS, K_DIST, K_DRIFT, K_PIVOT, K_TURN, P_MAX, P_MIN, R_COMPASS, SPEED_SHARE_Q30,
+    TILDE_Q16_PER_LSB, TURN_SHARE_Q27,
 };
 use super::covariance::{Covariance, BIAS, CCW, CW, SPEED, T, X, Y};
+use super::pivot::{lever_over_l, swing, swing_noise, Pivot};
 use super::predict::{Bounds, Filter};
 use super::update::{gate_bound, normalised_square, over_s, scale_shift, Outcome, Row};
 use super::Update;
@@ -40,6 +41,10 @@ pub(super) struct Shared {
     pub xy: i32,
     /// Heading variance added, Q12 mm^2 (of `L dtheta`).
     pub t: i32,
+    /// The learned pivot behind the axle (Q16 mm) and its lever `(D +
+    /// pivot) / L` (Q31): a turn swings the secondaries about it too.
+    pub behind: i32,
+    pub lever: i32,
 }
 
 impl Shared {
@@ -49,8 +54,9 @@ impl Shared {
     /// correlation distance or angle (`cfg::SPEED_CORRELATION_MM`,
     /// `cfg::TURN_CORRELATION_DEG`: a quarter turn's error exact, twice as
     /// much turned by a factor sqrt 2 too little).
-    pub fn of(f: &Filter, motion: Motion, scaled: Motion, dt: Dt) -> Shared {
+    pub fn of(f: &Filter, motion: Motion, scaled: Motion, dt: Dt, pivot: &Pivot) -> Shared {
         let dt_us = dt.as_micros();
+        let lever = lever_over_l(pivot.behind);
         let floor_xy = (FLOOR_POS.wrapping_mul(dt_us) >> 16) as i32;
         let floor_t = (FLOOR_HEADING.wrapping_mul(dt_us) >> 16) as i32;
         let (xy, t) = match (motion, scaled) {
@@ -67,15 +73,18 @@ impl Shared {
                 let share = mul_hi(turned, TURN_SHARE_Q27);
                 let from_scale = mul_hi(f.p.get(scale, scale), share) << 5;
                 // the turned angle's noise and the scale's: the heading's,
-                // and the position's by D / L (the reference point swings
-                // about the pivot), with the pivot's slop
+                // and the position's by (D + p) / L (the reference point
+                // swings about the pivot; its square in Q30), with the
+                // pivot's slop and the learned pivot's uncertainty
                 let var = mul_hi(turned, K_TURN).saturating_add(from_scale);
-                let pos = mul_q30(var, D_OVER_L_SQ_Q30).saturating_add(mul_hi(turned, K_PIVOT));
+                let pos = mul_q30(var, mul_hi(lever, lever))
+                    .saturating_add(mul_hi(turned, K_PIVOT))
+                    .saturating_add(swing_noise(pivot.var, turned));
                 (pos, var)
             }
             _ => (0, 0),
         };
-        Shared { scaled, xy: xy.saturating_add(floor_xy), t: t.saturating_add(floor_t) }
+        Shared { scaled, xy: xy.saturating_add(floor_xy), t: t.saturating_add(floor_t), behind: pivot.behind, lever }
     }
 }
 
@@ -117,7 +126,9 @@ impl Filter {
             }
             Motion::Turn(_) => {
                 let (s1, c1) = self.pose.sin_cos();
-                (mul_hi(D_OVER_L_Q31, (s0 >> 1) - (s1 >> 1)) << 2, mul_hi(D_OVER_L_Q31, (c1 >> 1) - (c0 >> 1)) << 2)
+                swing(&mut self.pose.x, &mut self.pose.y, (s0, c0), (s1, c1), shared.behind);
+                let lever = shared.lever;
+                (mul_hi(lever, (s0 >> 1) - (s1 >> 1)) << 2, mul_hi(lever, (c1 >> 1) - (c0 >> 1)) << 2)
             }
             Motion::Stop => (0, 0),
         };
@@ -381,9 +392,9 @@ mod tests {
             let mut light = whole;
             for _ in 0..steps {
                 let scaled = whole.scales.apply(motion);
-                let shared = Shared::of(&whole, motion, scaled, dt);
+                let shared = Shared::of(&whole, motion, scaled, dt, &Pivot::START);
                 light.predict_pose(&shared, dt, &BOUNDS);
-                whole.predict(motion, scaled, dt, &BOUNDS);
+                whole.predict(motion, scaled, dt, &Pivot::START, &BOUNDS);
             }
             light.pay();
             assert_eq!(light.pose, whole.pose, "{motion:?}: the same scaled motion");

@@ -116,6 +116,7 @@ mod constants;
 mod covariance;
 mod light;
 mod outcome;
+mod pivot;
 mod predict;
 mod report;
 mod research;
@@ -210,6 +211,8 @@ pub struct Estimator {
     /// Time predicted so far, us (wrapping).
     clock_us: u32,
     evidence: EvidenceSet,
+    /// Where turns in place pivot, learned (`pivot`).
+    pivot: pivot::Pivot,
     arena: Arena,
     /// Where the hypotheses' positions are kept (the arena and its margin).
     bounds: Bounds,
@@ -254,6 +257,7 @@ impl Estimator {
             odometer: 0,
             clock_us: 0,
             evidence: EvidenceSet::FRESH,
+            pivot: pivot::Pivot::START,
             arena,
             bounds,
             inside: Bounds { low_mm: 0, high_x_mm: whole(arena.length_x), high_y_mm: whole(arena.width_y) },
@@ -333,6 +337,12 @@ impl Estimator {
     }
     pub fn compass_bias(&self) -> Angle {
         self.best_filter().bias
+    }
+
+    /// The learned pivot of turns in place behind the axle, and the turns
+    /// it was learned from (see `pivot`).
+    pub fn pivot(&self) -> (Length, u32) {
+        (Length(self.pivot.behind), self.pivot.samples)
     }
 
     /// The live hypotheses: pose and cost (Q8, the best's 0).

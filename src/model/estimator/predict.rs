@@ -3,10 +3,11 @@
 //! Jacobian (a few shears) and noise.
 
 use super::constants::{
-    BIAS_WALK, D_OVER_L_Q31, FLOOR_HEADING, FLOOR_POS, K_BIAS_MM, K_DIST, K_DRIFT, K_PIVOT, K_TURN, P0_BIAS,
+    BIAS_WALK, FLOOR_HEADING, FLOOR_POS, K_BIAS_MM, K_DIST, K_DRIFT, K_PIVOT, K_TURN, P0_BIAS,
     P0_HEADING, P0_POS, P0_SPEED, P0_TURN, RAD_Q28_PER_LSB, SCALE_ONE, SCALE_WALK,
 };
 use super::covariance::{Covariance, BIAS, CCW, CW, SPEED, T, X, Y};
+use super::pivot::{lever_over_l, swing, swing_noise, Pivot};
 use crate::math::{mul_hi, Angle, Coord, Dt, Speed, TurnRate};
 use crate::model::actuator::Motion;
 use crate::model::state::{advance, Pose};
@@ -80,8 +81,9 @@ impl Filter {
     }
 
     /// Moves the pose by `motion` (the lines' motion; `scaled`, the same by
-    /// this hypothesis's scales) held for `dt` and grows the uncertainty.
-    pub(super) fn predict(&mut self, motion: Motion, scaled: Motion, dt: Dt, bounds: &Bounds) {
+    /// this hypothesis's scales) held for `dt`, a turn about the learned
+    /// `pivot`, and grows the uncertainty.
+    pub(super) fn predict(&mut self, motion: Motion, scaled: Motion, dt: Dt, pivot: &Pivot, bounds: &Bounds) {
         let dt_us = dt.as_micros();
         let p = &mut self.p;
         match (motion, scaled) {
@@ -110,17 +112,20 @@ impl Filter {
                 let (s0, c0) = self.pose.sin_cos();
                 advance(&mut self.pose, scaled, dt);
                 let (s1, c1) = self.pose.sin_cos();
-                // The turn (model::state): x' = x - D (c0 - c1), y' = y - D (s0 - s1):
-                // dx'/dtheta = D (s0 - s1), dy'/dtheta = D (c1 - c0); halves of
-                // Q30 keep the differences in i32 (Q29), D/L Q31 times Q29 is
-                // Q28 from mul_hi, hence the << 2: below 7/16 in Q30.
-                let f1 = mul_hi(D_OVER_L_Q31, (s0 >> 1) - (s1 >> 1)) << 2;
-                let f2 = mul_hi(D_OVER_L_Q31, (c1 >> 1) - (c0 >> 1)) << 2;
-                // The turn's direction G = (-D s1 / L, D c1 / L, 1) (Q30, the
-                // position entries below 2^28): the turned angle's noise and,
+                swing(&mut self.pose.x, &mut self.pose.y, (s0, c0), (s1, c1), pivot.behind);
+                // The turn (model::state) about the pivot, R = D + p behind:
+                // x' = x - R (c0 - c1), y' = y - R (s0 - s1): dx'/dtheta = R
+                // (s0 - s1), dy'/dtheta = R (c1 - c0); halves of Q30 keep the
+                // differences in i32 (Q29), R/L Q31 times Q29 is Q28 from
+                // mul_hi, hence the << 2: far below 1/2 in Q30 for a step.
+                let lever = lever_over_l(pivot.behind);
+                let f1 = mul_hi(lever, (s0 >> 1) - (s1 >> 1)) << 2;
+                let f2 = mul_hi(lever, (c1 >> 1) - (c0 >> 1)) << 2;
+                // The turn's direction G = (-R s1 / L, R c1 / L, 1) (Q30, the
+                // position entries below 2^30): the turned angle's noise and,
                 // times the commanded angle a0, the scale's column.
-                let g1 = -(mul_hi(D_OVER_L_Q31, s1) << 1);
-                let g2 = mul_hi(D_OVER_L_Q31, c1) << 1;
+                let g1 = -(mul_hi(lever, s1) << 1);
+                let g2 = mul_hi(lever, c1) << 1;
                 // a0: the lines' angle this step, |a0| < 2^30 LSB (TurnRate::MAX
                 // over Dt::MAX); in rad Q30 below 1.6 (the shear clamps at 1/2:
                 // a step turns 0.2 rad at 3 rad/s for 65 ms)
@@ -132,13 +137,15 @@ impl Filter {
                 p.shear(X, (T, f1), (scale, crate::math::mul_q30(a_rad, g1)));
                 p.shear(Y, (T, f2), (scale, crate::math::mul_q30(a_rad, g2)));
                 p.shear(T, (scale, a_rad), (BIAS, 0));
-                // Q: the turned angle's noise along G; the pivot's across the
-                // car (unit (-s1, c1)); the scale's drift.
+                // Q: the turned angle's noise along G; the pivot's slop and
+                // the learned pivot's uncertainty across the car (unit (-s1,
+                // c1)); the scale's drift.
                 // (per angle turned: |turned| <= 2^31, the factors below
                 // 2^31, so each variance below 2^30; the conditioning caps)
                 let turned = self.pose.theta.diff(before).saturating_abs();
                 p.add_outer(mul_hi(turned, K_TURN), [X, Y, T], [g1, g2, 1 << 30]);
-                p.add_outer(mul_hi(turned, K_PIVOT), [X, Y], [-s1, c1]);
+                let across = mul_hi(turned, K_PIVOT).saturating_add(swing_noise(pivot.var, turned));
+                p.add_outer(across, [X, Y], [-s1, c1]);
                 p.add(scale, scale, (SCALE_WALK.wrapping_mul(dt_us) >> 16) as i32);
             }
             _ => {}

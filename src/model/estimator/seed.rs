@@ -11,9 +11,17 @@ use crate::math::Length;
 use crate::model::state::Pose;
 
 impl Estimator {
-    /// Forgets everything but the counts: one hypothesis at `pose` with the
-    /// config's initial uncertainty, `Unknown`.
+    /// Forgets everything but the counts, the learned pivot too (a typed
+    /// `pose` starts over): one hypothesis at `pose` with the config's
+    /// initial uncertainty, `Unknown`.
     pub fn reset(&mut self, pose: Pose) {
+        self.pivot = super::pivot::Pivot::START;
+        self.lose_place(pose);
+    }
+
+    /// The place is lost (a localization failed), the robot is the same:
+    /// as [`Estimator::reset`] at `pose`, keeping the learned pivot.
+    pub fn lose_place(&mut self, pose: Pose) {
         let mut f = Filter::new(pose);
         f.keep_in(&self.bounds);
         self.start(&[(f, 0)], Tracking::Unknown);
@@ -72,6 +80,7 @@ impl Estimator {
     }
 
     fn start(&mut self, hyps: &[(Filter, i32)], tracking: Tracking) {
+        self.pivot.interrupt();
         for (((h, c), id), (f, cost)) in
             self.hyps.iter_mut().zip(self.costs.iter_mut()).zip(self.ids.iter_mut()).zip(hyps.iter())
         {

@@ -12,6 +12,7 @@ use super::constants::{
 };
 use super::covariance::BIAS;
 use super::light::Shared;
+use super::pivot::swing;
 use super::predict::Filter;
 use super::update::Outcome;
 use super::{Estimator, Sensor, Tracking, Update};
@@ -53,11 +54,17 @@ impl Estimator {
     pub(super) fn predict_all(&mut self, motion: Motion, dt: Dt) {
         let (bounds, best) = (self.bounds, self.best);
         let scaled = self.best_filter().scales.apply(motion);
-        let shared = if self.live > 1 { Some(Shared::of(self.best_filter(), motion, scaled, dt)) } else { None };
+        let (turning, theta, leader) =
+            (matches!(motion, Motion::Turn(_)), self.best_filter().pose.theta, self.best_id());
+        let located = self.tracking == Tracking::Located;
+        self.pivot.step(turning, theta, leader, self.clock_us, dt.as_micros(), located);
+        let pivot = self.pivot;
+        let shared =
+            if self.live > 1 { Some(Shared::of(self.best_filter(), motion, scaled, dt, &pivot)) } else { None };
         for (i, (h, _)) in self.live_mut().enumerate() {
             match &shared {
                 Some(s) if i != best => h.predict_pose(s, dt, &bounds),
-                _ => h.predict(motion, scaled, dt, &bounds),
+                _ => h.predict(motion, scaled, dt, &pivot, &bounds),
             }
         }
         // the travel: |d| for a straight step, the arc at 100 mm for a turn
@@ -68,7 +75,13 @@ impl Estimator {
         };
         self.odometer = self.odometer.wrapping_add(travel);
         self.clock_us = self.clock_us.wrapping_add(dt.as_micros());
+        let before = self.reported.sin_cos();
         advance(&mut self.reported, scaled, dt);
+        if turning {
+            let after = self.reported.sin_cos();
+            let r = &mut self.reported;
+            swing(&mut r.x, &mut r.y, before, after, pivot.behind);
+        }
         if motion == Motion::Stop {
             if !self.standing {
                 self.slack = self.slack.min(CATCH_UP_STANDING_Q16);
@@ -114,11 +127,16 @@ impl Estimator {
     pub(super) fn lidar_all(&mut self, which: LidarId, distance: Length) -> Update {
         let counted = self.counts(Sensor::of(which));
         let (arena, bounds, best, other) = (self.arena, self.bounds, self.best, self.next_secondary());
+        let mut moved = (0i64, 0i64);
         let mut through = |i: usize| -> Option<(Outcome, bool)> {
             let h = self.hyps.get_mut(i)?;
             let Some(r) = h.lidar_reading(&arena, which, distance) else { return Some((Outcome::UNUSABLE, false)) };
             let (outcome, repairs) = if i == best {
-                h.correct(r.row, r.nu, r.r, &bounds)
+                // the leader's correction: what it moved teaches the pivot
+                let (x, y) = (h.pose.x.0, h.pose.y.0);
+                let done = h.correct(r.row, r.nu, r.r, &bounds);
+                moved = (h.pose.x.0.wrapping_sub(x), h.pose.y.0.wrapping_sub(y));
+                done
             } else {
                 h.correct_pose(r.row, r.nu, r.r, &bounds)
             };
@@ -128,6 +146,8 @@ impl Estimator {
         };
         let lead = through(best).unwrap_or((Outcome::UNUSABLE, false));
         let second = other.and_then(&mut through);
+        let leader = self.best_id();
+        self.pivot.moved(leader, moved.0, moved.1);
         self.weigh(counted, lead, other.zip(second));
         if self.disagreed(Sensor::of(which), lead.0.update, lead.1 && counted) {
             self.research_lidar(which, distance);
