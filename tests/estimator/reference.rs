@@ -132,7 +132,11 @@ impl Reference {
                 let lc = cfg::TURN_CORRELATION_DEG.to_radians();
                 let turned = (a0 * self.scales[k]).abs();
                 let vt = cfg::TURN_SPREAD.powi(2) * lc * L * L * turned;
-                let vp = cfg::PIVOT_SIGMA_MM.powi(2) * lc * turned;
+                // the pivot's slop, and the learned pivot's uncertainty (not
+                // learned here: its start, 40 mm) as a random walk that
+                // gives a quarter turn its chord's variance
+                let unlearned = cfg::PIVOT_STATE_SIGMA_MM.powi(2) * 4.0 / std::f64::consts::PI;
+                let vp = cfg::PIVOT_SIGMA_MM.powi(2) * lc * turned + unlearned * turned;
                 let u = [-s1, c1];
                 for i in 0..3 {
                     for j in 0..3 {
