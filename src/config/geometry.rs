@@ -10,7 +10,9 @@ pub const WHEEL_RADIUS: Length = Length::from_mm_f64(20.0);
 pub const AXLE_LENGTH: Length = Length::from_mm_f64(85.0);
 /// D: from the rotation axis (axle midpoint) to the car's reference
 /// point, mm. The report gives no number; the team's later estimator used
-/// 56 mm (fact sheet). Must stay below 128 mm (state update's Q24).
+/// 56 mm (fact sheet). Must stay below 128 mm (with a pivot learned up to
+/// `estimator::PIVOT_MAX_MM` behind the axle the turn's lever stays below
+/// the state update's 255 mm, `model::state::Lever`).
 pub const ROTATION_TO_REFERENCE: Length = Length::from_mm_f64(56.0);
 /// The paper skid drags about 70 mm behind the axle (report 1).
 pub const SKID_BEHIND_AXLE: Length = Length::from_mm_f64(70.0);

@@ -243,6 +243,12 @@ impl Coord {
     pub fn add_q22(self, step: i32) -> Coord {
         Coord(self.0.wrapping_add(i64::from(step) << 10))
     }
+    /// The same for a step in Q21 mm.
+    // step bar
+    #[inline(always)]
+    pub fn add_q21(self, step: i32) -> Coord {
+        Coord(self.0.wrapping_add(i64::from(step) << 11))
+    }
 }
 
 /// Linear speed: `i32` in units of 2^-32 mm/us (2.3e-7 m/s), signed.

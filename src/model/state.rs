@@ -23,14 +23,34 @@ use crate::config;
 use crate::math::{mul_hi, sin_cos, Angle, Coord, Dt, Length};
 use crate::model::actuator::Motion;
 
-/// `sin_cos(at)` and `D` times it, remembered.
+/// A turn's lever: how far the reference point is from the point a turn
+/// in place leaves where it stands, Q23 mm (0 to 255 mm). About the axle
+/// it is `D` ([`Lever::AXLE`]); a car whose skid drags turns about a point
+/// further back (`model::estimator::pivot`).
+#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
+pub struct Lever(i32);
+
+impl Lever {
+    /// `D`: turns about the axle (the config asserts `D` below 128 mm).
+    pub const AXLE: Lever = Lever(config::geometry::ROTATION_TO_REFERENCE.0 << 7);
+
+    /// `D` plus `behind` (Q16 mm, the pivot behind the axle), kept within
+    /// 0 to 255 mm.
+    pub fn behind_axle(behind: i32) -> Lever {
+        let mm_q16 = config::geometry::ROTATION_TO_REFERENCE.0.saturating_add(behind);
+        Lever(mm_q16.clamp(0, 255 << 16) << 7)
+    }
+}
+
+/// `sin_cos(at)` and the lever times it, remembered.
 #[derive(Clone, Copy, Debug)]
 struct Trig {
     at: Angle,
+    lever: Lever,
     /// Q2.30
     sin: i32,
     cos: i32,
-    /// `D sin`, `D cos` in Q22 mm (|.| < 2^30 for D < 128 mm).
+    /// `lever sin`, `lever cos` in Q21 mm (|.| < 2^30).
     d_sin: i32,
     d_cos: i32,
 }
@@ -38,12 +58,12 @@ struct Trig {
 impl Trig {
     // step bar (as every inline attribute in this file)
     #[inline(always)]
-    fn of(at: Angle) -> Trig {
-        Trig::with(at, sin_cos(at))
+    fn of(at: Angle, lever: Lever) -> Trig {
+        Trig::with(at, sin_cos(at), lever)
     }
     #[inline(always)]
-    fn with(at: Angle, (sin, cos): (i32, i32)) -> Trig {
-        Trig { at, sin, cos, d_sin: mul_hi(D_Q24, sin), d_cos: mul_hi(D_Q24, cos) }
+    fn with(at: Angle, (sin, cos): (i32, i32), lever: Lever) -> Trig {
+        Trig { at, lever, sin, cos, d_sin: mul_hi(lever.0, sin), d_cos: mul_hi(lever.0, cos) }
     }
 }
 
@@ -79,7 +99,7 @@ impl Default for Pose {
 
 impl Pose {
     pub fn new(x: Coord, y: Coord, theta: Angle) -> Pose {
-        Pose { x, y, theta, theta_frac: 0, trig: Trig::of(theta) }
+        Pose { x, y, theta, theta_frac: 0, trig: Trig::of(theta, Lever::AXLE) }
     }
     /// With a sub-LSB heading fraction (to restore a pose exactly).
     pub fn from_parts(x: Coord, y: Coord, theta: Angle, theta_frac: u16) -> Pose {
@@ -87,6 +107,14 @@ impl Pose {
     }
     pub fn from_mm(x_mm: i32, y_mm: i32, theta: Angle) -> Pose {
         Pose::new(Coord::from_length(Length::from_mm(x_mm)), Coord::from_length(Length::from_mm(y_mm)), theta)
+    }
+    /// Takes `from`'s place, heading and cached sine and cosine.
+    // tick bar: field by field (a pose assigned whole is a memmove call,
+    // 121 instructions)
+    #[inline(always)]
+    pub fn take(&mut self, from: &Pose) {
+        (self.x, self.y, self.theta, self.theta_frac) = (from.x, from.y, from.theta, from.theta_frac);
+        self.trig = from.trig;
     }
     /// `(sin theta, cos theta)` in Q2.30, from the cache when it is current.
     #[inline(always)]
@@ -97,19 +125,32 @@ impl Pose {
     #[inline(always)]
     fn trig(&mut self) -> Trig {
         if self.trig.at != self.theta {
-            self.trig = Trig::of(self.theta);
+            self.trig = Trig::of(self.theta, self.trig.lever);
+        }
+        self.trig
+    }
+    /// The cache for a turn about `lever`.
+    #[inline(always)]
+    fn trig_about(&mut self, lever: Lever) -> Trig {
+        if self.trig.at != self.theta || self.trig.lever != lever {
+            self.trig = Trig::of(self.theta, lever);
         }
         self.trig
     }
 }
 
-/// `D` in Q24 mm (the config asserts it is below 128 mm, so it fits).
-const D_Q24: i32 = config::geometry::ROTATION_TO_REFERENCE.0 << 8;
+/// Advances `pose` in place by `motion` held for `dt`, turning about the
+/// axle: the robot's path ([`advance_about`] with [`Lever::AXLE`]).
+#[inline(always)]
+pub fn advance(pose: &mut Pose, motion: Motion, dt: Dt) {
+    advance_about(pose, motion, dt, Lever::AXLE);
+}
 
-/// Advances `pose` in place by `motion` held for `dt`: the robot's path.
+/// Advances `pose` in place by `motion` held for `dt`, a turn swinging
+/// the reference point on `lever` (the module docs' `D`).
 // step bar: the bar measures this one call
 #[inline(never)]
-pub fn advance(pose: &mut Pose, motion: Motion, dt: Dt) {
+pub fn advance_about(pose: &mut Pose, motion: Motion, dt: Dt, lever: Lever) {
     match motion {
         Motion::Stop => {}
         Motion::Straight(v) => {
@@ -123,13 +164,13 @@ pub fn advance(pose: &mut Pose, motion: Motion, dt: Dt) {
             let (rot, frac) = w.rotation(dt);
             let (f, carry) = pose.theta_frac.overflowing_add(frac);
             let theta = pose.theta.wrapping_add(rot).wrapping_add(Angle(u32::from(carry)));
-            let t0 = pose.trig();
-            let t1 = Trig::with(theta, sin_cos(theta));
-            // Q22 differences of values below 2^30: no overflow. The products
+            let t0 = pose.trig_about(lever);
+            let t1 = Trig::with(theta, sin_cos(theta), lever);
+            // Q21 differences of values below 2^30: no overflow. The products
             // of one step's new heading are the next step's old ones, so a
             // turn telescopes exactly: no rounding builds up.
-            pose.x = pose.x.add_q22(t1.d_cos - t0.d_cos);
-            pose.y = pose.y.add_q22(t1.d_sin - t0.d_sin);
+            pose.x = pose.x.add_q21(t1.d_cos - t0.d_cos);
+            pose.y = pose.y.add_q21(t1.d_sin - t0.d_sin);
             pose.theta = theta;
             pose.theta_frac = f;
             pose.trig = t1;

@@ -19,13 +19,13 @@ use super::constants::{
     TILDE_Q16_PER_LSB, TURN_SHARE_Q27,
 };
 use super::covariance::{Covariance, BIAS, CCW, CW, SPEED, T, X, Y};
-use super::pivot::{lever_over_l, swing, swing_noise, Pivot};
+use super::pivot::{swing_noise, Pivot};
 use super::predict::{Bounds, Filter};
 use super::update::{gate_bound, normalised_square, over_s, scale_shift, Outcome, Row};
 use super::Update;
 use crate::math::{mul_hi, mul_q30, mul_wide, normalize, reciprocal, shift, Angle, Coord, Dt};
 use crate::model::actuator::Motion;
-use crate::model::state::advance;
+use crate::model::state::{advance_about, Lever};
 
 // `project_pose` indexes its `b` by the state
 const _: () = assert!(X == 0 && Y == 1 && T == 2);
@@ -41,9 +41,10 @@ pub(super) struct Shared {
     pub xy: i32,
     /// Heading variance added, Q12 mm^2 (of `L dtheta`).
     pub t: i32,
-    /// The learned pivot behind the axle (Q16 mm) and its lever `(D +
-    /// pivot) / L` (Q31): a turn swings the secondaries about it too.
-    pub behind: i32,
+    /// The learned pivot's lever, `D + pivot` for the state update and
+    /// over `L` (Q31) for the Jacobian: a turn swings the secondaries
+    /// about it too.
+    pub turn_lever: Lever,
     pub lever: i32,
 }
 
@@ -56,7 +57,7 @@ impl Shared {
     /// much turned by a factor sqrt 2 too little).
     pub fn of(f: &Filter, motion: Motion, scaled: Motion, dt: Dt, pivot: &Pivot) -> Shared {
         let dt_us = dt.as_micros();
-        let lever = lever_over_l(pivot.behind);
+        let lever = pivot.lever;
         let floor_xy = (FLOOR_POS.wrapping_mul(dt_us) >> 16) as i32;
         let floor_t = (FLOOR_HEADING.wrapping_mul(dt_us) >> 16) as i32;
         let (xy, t) = match (motion, scaled) {
@@ -84,7 +85,7 @@ impl Shared {
             }
             _ => (0, 0),
         };
-        Shared { scaled, xy: xy.saturating_add(floor_xy), t: t.saturating_add(floor_t), behind: pivot.behind, lever }
+        Shared { scaled, xy: xy.saturating_add(floor_xy), t: t.saturating_add(floor_t), turn_lever: pivot.turn_lever, lever }
     }
 }
 
@@ -116,7 +117,7 @@ impl Filter {
     /// the pose block's owed (see [`Owed`]).
     pub(super) fn predict_pose(&mut self, shared: &Shared, dt: Dt, bounds: &Bounds) {
         let (s0, c0) = self.pose.sin_cos();
-        advance(&mut self.pose, shared.scaled, dt);
+        advance_about(&mut self.pose, shared.scaled, dt, shared.turn_lever);
         // the Jacobian as the leader's (position by heading)
         let (fx, fy) = match shared.scaled {
             Motion::Straight(v) => {
@@ -126,7 +127,6 @@ impl Filter {
             }
             Motion::Turn(_) => {
                 let (s1, c1) = self.pose.sin_cos();
-                swing(&mut self.pose.x, &mut self.pose.y, (s0, c0), (s1, c1), shared.behind);
                 let lever = shared.lever;
                 (mul_hi(lever, (s0 >> 1) - (s1 >> 1)) << 2, mul_hi(lever, (c1 >> 1) - (c0 >> 1)) << 2)
             }
@@ -388,6 +388,8 @@ mod tests {
         let straight = (450.0 / 130.0 / 0.01) as usize; // 130 mm/s
         let mut learned = Pivot::START;
         (learned.behind, learned.var) = (60 << 16, 9 << 12);
+        learned.lever = super::super::pivot::lever_over_l(learned.behind);
+        learned.turn_lever = Lever::behind_axle(learned.behind);
         for pivot in [learned, Pivot::START] {
             for (motion, steps) in [
                 (Motion::Turn(TurnRate::from_mrad_s(2500)), quarter),

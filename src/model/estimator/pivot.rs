@@ -24,7 +24,8 @@ use super::constants::{
     D_OVER_L_Q31, P0_PIVOT, PIVOT_MAX_Q16, PIVOT_MIN_Q16, PIVOT_SAMPLE_VAR, PIVOT_SETTLE_US, PIVOT_WALK,
 };
 use crate::config::estimator as cfg;
-use crate::math::{div_i64, mul_wide, sin_cos, Angle, Coord};
+use crate::math::{div_i64, sin_cos, Angle};
+use crate::model::state::Lever;
 
 /// A turn being learned from: where the leader's heading started, which
 /// hypothesis led, and the leader's position corrections since (Q32 mm).
@@ -45,8 +46,14 @@ struct Turn {
 pub(super) struct Pivot {
     /// Behind the axle, Q16 mm, within `cfg::PIVOT_MIN_MM..=PIVOT_MAX_MM`.
     pub behind: i32,
-    /// Its variance, Q12 mm^2.
+    /// Its variance, Q12 mm^2, as of `walked_us` (its random walk since is
+    /// added when a turn teaches it).
     pub var: i32,
+    walked_us: u32,
+    /// `(D + behind) / L`, Q31 ([`lever_over_l`]).
+    pub lever: i32,
+    /// `D + behind`, the turn's lever for the state update.
+    pub turn_lever: Lever,
     turn: Option<Turn>,
     /// Turns learned from.
     pub samples: u32,
@@ -64,14 +71,18 @@ const MIN_CHORD_SQ: i64 = {
 
 impl Pivot {
     /// About the axle, the config's initial uncertainty.
-    pub const START: Pivot = Pivot { behind: 0, var: P0_PIVOT, turn: None, samples: 0 };
+    pub const START: Pivot = Pivot { behind: 0, var: P0_PIVOT, walked_us: 0,
+        lever: D_OVER_L_Q31,
+        turn_lever: Lever::AXLE,
+        turn: None,
+        samples: 0,
+    };
 
-    /// One prediction step of `dt_us` at `clock_us`, the leader `leader`
-    /// at heading `theta` before it: a turning step opens (or extends) the
-    /// turn; the first step a settling time after its last closes it, when
-    /// `located` (the position is one place, not ambiguous).
-    pub fn step(&mut self, turning: bool, theta: Angle, leader: u8, clock_us: u32, dt_us: u32, located: bool) {
-        self.var = self.var.saturating_add((PIVOT_WALK.wrapping_mul(dt_us) >> 16) as i32).min(P0_PIVOT);
+    /// One prediction step at `clock_us`, the leader `leader` at heading
+    /// `theta` before it: a turning step opens (or extends) the turn; the
+    /// first step a settling time after its last closes it, when `located`
+    /// (the position is one place, not ambiguous).
+    pub fn step(&mut self, turning: bool, theta: Angle, leader: u8, clock_us: u32, located: bool) {
         match (&mut self.turn, turning) {
             (Some(t), true) if t.leader == leader => t.last_us = clock_us,
             (_, true) => {
@@ -81,7 +92,7 @@ impl Pivot {
                 let t = *t;
                 self.turn = None;
                 if located && t.leader == leader {
-                    self.learn(&t, theta);
+                    self.learn(&t, theta, clock_us);
                 }
             }
             _ => {}
@@ -109,7 +120,7 @@ impl Pivot {
     /// along the chord `u1 - u0` over its square, weighed by a scalar
     /// Kalman step (sample variance `cfg::PIVOT_SAMPLE_SIGMA_MM^2` over the
     /// chord's square).
-    fn learn(&mut self, t: &Turn, to: Angle) {
+    fn learn(&mut self, t: &Turn, to: Angle, clock_us: u32) {
         let ((s0, c0), (s1, c1)) = (sin_cos(t.from), sin_cos(to));
         // halves of Q30: the chord's components in Q29
         let (vx, vy) = (i64::from((c1 >> 1) - (c0 >> 1)), i64::from((s1 >> 1) - (s0 >> 1)));
@@ -122,11 +133,17 @@ impl Pivot {
         // (m . v) Q16 * Q29 = Q45, over |v|^2 Q30: Q15 -> << 1: Q16 mm
         let Some(e) = div_i64(mx.saturating_mul(vx).saturating_add(my.saturating_mul(vy)), chord_sq) else { return };
         let e = (e << 1).clamp(i64::from(PIVOT_MIN_Q16 - PIVOT_MAX_Q16), i64::from(PIVOT_MAX_Q16 - PIVOT_MIN_Q16));
+        // the random walk since the last sample (per us times 2^16), then
         // the sample's variance (Q12 mm^2) over the chord's square (Q30)
+        let walked = (u64::from(PIVOT_WALK) * u64::from(clock_us.wrapping_sub(self.walked_us))) >> 16;
+        self.walked_us = clock_us;
+        self.var = i64::from(self.var).saturating_add(walked as i64).min(i64::from(P0_PIVOT)) as i32;
         let Some(sample_var) = div_i64(i64::from(PIVOT_SAMPLE_VAR) << 30, chord_sq) else { return };
         let (var, total) = (i64::from(self.var), i64::from(self.var) + sample_var);
         let (Some(step), Some(after)) = (div_i64(e * var, total), div_i64(var * sample_var, total)) else { return };
         self.behind = (i64::from(self.behind) + step).clamp(i64::from(PIVOT_MIN_Q16), i64::from(PIVOT_MAX_Q16)) as i32;
+        self.lever = lever_over_l(self.behind);
+        self.turn_lever = Lever::behind_axle(self.behind);
         self.var = after.clamp(1, i64::from(P0_PIVOT)) as i32;
         self.samples = self.samples.saturating_add(1);
     }
@@ -151,20 +168,6 @@ pub(super) fn swing_noise(var: i32, turned: i32) -> i32 {
     crate::math::mul_hi(var, turned) << 3
 }
 
-/// A turn's step of `(x, y)` about a pivot `behind` (Q16 mm) behind the
-/// axle: [`crate::model::state::advance`] swung the reference point on `D`
-/// from the heading whose sine and cosine were `(s0, c0)` to `(s1, c1)`;
-/// about the pivot it swings on `D + behind`, so it moves by `behind (c1 -
-/// c0, s1 - s0)` more.
-// tick bar: inlined into the predictions
-#[inline(always)]
-pub(super) fn swing(x: &mut Coord, y: &mut Coord, (s0, c0): (i32, i32), (s1, c1): (i32, i32), behind: i32) {
-    let (dc, ds) = ((c1 >> 1) - (c0 >> 1), (s1 >> 1) - (s0 >> 1));
-    // Q16 mm times Q29 >> 13 is the Coord's Q32
-    *x = Coord(x.0.wrapping_add(mul_wide(behind, dc) >> 13));
-    *y = Coord(y.0.wrapping_add(mul_wide(behind, ds) >> 13));
-}
-
 #[cfg(test)]
 #[allow(clippy::restriction)] // test code: a panic fails the test
 mod tests {
@@ -187,7 +190,7 @@ mod tests {
         let quarter = Angle::QUARTER_TURN;
         let run = |to: Angle, leader_at_end: u8, located: bool, corrections: u32| {
             let mut p = Pivot::START;
-            p.step(true, Angle::ZERO, 0, 0, 10_000, true);
+            p.step(true, Angle::ZERO, 0, 0, true);
             // 30 mm along the chord from north (u0 = (1, 0)) to `to`
             let (s1, c1) = sin_cos(to);
             let (vx, vy) = (f64::from(c1) / f64::from(1 << 30) - 1.0, f64::from(s1) / f64::from(1 << 30));
@@ -196,7 +199,7 @@ mod tests {
             for _ in 1..corrections {
                 p.moved(0, 0, 0);
             }
-            p.step(false, to, leader_at_end, 10_000 + PIVOT_SETTLE_US, 10_000, located);
+            p.step(false, to, leader_at_end, 10_000 + PIVOT_SETTLE_US, located);
             p
         };
         let enough = cfg::PIVOT_MIN_CORRECTIONS;

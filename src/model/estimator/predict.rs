@@ -7,10 +7,10 @@ use super::constants::{
     P0_HEADING, P0_POS, P0_SPEED, P0_TURN, RAD_Q28_PER_LSB, SCALE_ONE, SCALE_WALK,
 };
 use super::covariance::{Covariance, BIAS, CCW, CW, SPEED, T, X, Y};
-use super::pivot::{lever_over_l, swing, swing_noise, Pivot};
+use super::pivot::{swing_noise, Pivot};
 use crate::math::{mul_hi, Angle, Coord, Dt, Speed, TurnRate};
 use crate::model::actuator::Motion;
-use crate::model::state::{advance, Pose};
+use crate::model::state::{advance, advance_about, Pose};
 
 /// The learned scales of the actuator lines, Q29 (1 = the lines).
 #[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
@@ -110,15 +110,14 @@ impl Filter {
             (Motion::Turn(w0), Motion::Turn(_)) => {
                 let before = self.pose.theta;
                 let (s0, c0) = self.pose.sin_cos();
-                advance(&mut self.pose, scaled, dt);
+                advance_about(&mut self.pose, scaled, dt, pivot.turn_lever);
                 let (s1, c1) = self.pose.sin_cos();
-                swing(&mut self.pose.x, &mut self.pose.y, (s0, c0), (s1, c1), pivot.behind);
                 // The turn (model::state) about the pivot, R = D + p behind:
                 // x' = x - R (c0 - c1), y' = y - R (s0 - s1): dx'/dtheta = R
                 // (s0 - s1), dy'/dtheta = R (c1 - c0); halves of Q30 keep the
                 // differences in i32 (Q29), R/L Q31 times Q29 is Q28 from
                 // mul_hi, hence the << 2: far below 1/2 in Q30 for a step.
-                let lever = lever_over_l(pivot.behind);
+                let lever = pivot.lever;
                 let f1 = mul_hi(lever, (s0 >> 1) - (s1 >> 1)) << 2;
                 let f2 = mul_hi(lever, (c1 >> 1) - (c0 >> 1)) << 2;
                 // The turn's direction G = (-R s1 / L, R c1 / L, 1) (Q30, the

@@ -35,7 +35,7 @@ impl Estimator {
         match self.tracking {
             Tracking::Unknown => {
                 if let Some(h) = self.hyps.get(best) {
-                    self.reported = h.pose;
+                    self.reported.take(&h.pose);
                 }
             }
             Tracking::Ambiguous if !self.dominant => {}

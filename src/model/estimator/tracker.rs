@@ -12,7 +12,6 @@ use super::constants::{
 };
 use super::covariance::BIAS;
 use super::light::Shared;
-use super::pivot::swing;
 use super::predict::Filter;
 use super::update::Outcome;
 use super::{Estimator, Sensor, Tracking, Update};
@@ -20,7 +19,7 @@ use crate::config::estimator as cfg;
 use crate::math::{mul_hi, Angle, Coord, Dt, Length};
 use crate::model::actuator::Motion;
 use crate::model::measurement::LidarId;
-use crate::model::state::advance;
+use crate::model::state::advance_about;
 
 /// The travel a turn counts as, mm per radian (its arc at 100 mm), as a
 /// factor on angle LSB for `mul_hi`: 100 * 2 pi * 2^16 (Q16 mm) per 2^32 LSB
@@ -57,7 +56,7 @@ impl Estimator {
         let (turning, theta, leader) =
             (matches!(motion, Motion::Turn(_)), self.best_filter().pose.theta, self.best_id());
         let located = self.tracking == Tracking::Located;
-        self.pivot.step(turning, theta, leader, self.clock_us, dt.as_micros(), located);
+        self.pivot.step(turning, theta, leader, self.clock_us, located);
         let pivot = self.pivot;
         let shared =
             if self.live > 1 { Some(Shared::of(self.best_filter(), motion, scaled, dt, &pivot)) } else { None };
@@ -75,13 +74,7 @@ impl Estimator {
         };
         self.odometer = self.odometer.wrapping_add(travel);
         self.clock_us = self.clock_us.wrapping_add(dt.as_micros());
-        let before = self.reported.sin_cos();
-        advance(&mut self.reported, scaled, dt);
-        if turning {
-            let after = self.reported.sin_cos();
-            let r = &mut self.reported;
-            swing(&mut r.x, &mut r.y, before, after, pivot.behind);
-        }
+        advance_about(&mut self.reported, scaled, dt, pivot.turn_lever);
         if motion == Motion::Stop {
             if !self.standing {
                 self.slack = self.slack.min(CATCH_UP_STANDING_Q16);
@@ -284,7 +277,10 @@ impl Estimator {
         let was = self.tracking;
         if was == Tracking::Unknown && dominant {
             // the reported pose was the best's until now: it stays so
-            self.reported = self.best_filter().pose;
+            let best = self.best;
+            if let Some(h) = self.hyps.get(best) {
+                self.reported.take(&h.pose);
+            }
         }
         let unknown = was == Tracking::Unknown && dominant && !self.settled();
         self.tracking = if unknown { Tracking::Unknown } else { Tracking::Ambiguous };
