@@ -19,7 +19,7 @@ use super::constants::{
     TILDE_Q16_PER_LSB, TURN_SHARE_Q27,
 };
 use super::covariance::{Covariance, BIAS, CCW, CW, SPEED, T, X, Y};
-use super::pivot::{swing_noise, Pivot};
+use super::pivot::{swing_noise, Turning};
 use super::predict::{Bounds, Filter};
 use super::update::{gate_bound, normalised_square, over_s, scale_shift, Outcome, Row};
 use super::Update;
@@ -55,9 +55,9 @@ impl Shared {
     /// correlation distance or angle (`cfg::SPEED_CORRELATION_MM`,
     /// `cfg::TURN_CORRELATION_DEG`: a quarter turn's error exact, twice as
     /// much turned by a factor sqrt 2 too little).
-    pub fn of(f: &Filter, motion: Motion, scaled: Motion, dt: Dt, pivot: &Pivot) -> Shared {
+    pub fn of(f: &Filter, motion: Motion, scaled: Motion, dt: Dt, pivot: &Turning) -> Shared {
         let dt_us = dt.as_micros();
-        let lever = pivot.lever;
+
         let floor_xy = (FLOOR_POS.wrapping_mul(dt_us) >> 16) as i32;
         let floor_t = (FLOOR_HEADING.wrapping_mul(dt_us) >> 16) as i32;
         let (xy, t) = match (motion, scaled) {
@@ -78,14 +78,14 @@ impl Shared {
                 // swings about the pivot; its square in Q30), with the
                 // pivot's slop and the learned pivot's uncertainty
                 let var = mul_hi(turned, K_TURN).saturating_add(from_scale);
-                let pos = mul_q30(var, mul_hi(lever, lever))
+                let pos = mul_q30(var, pivot.over_l_sq)
                     .saturating_add(mul_hi(turned, K_PIVOT))
                     .saturating_add(swing_noise(pivot.var, turned));
                 (pos, var)
             }
             _ => (0, 0),
         };
-        Shared { scaled, xy: xy.saturating_add(floor_xy), t: t.saturating_add(floor_t), turn_lever: pivot.turn_lever, lever }
+        Shared { scaled, xy: xy.saturating_add(floor_xy), t: t.saturating_add(floor_t), turn_lever: pivot.lever, lever: pivot.over_l }
     }
 }
 
@@ -320,6 +320,7 @@ impl Covariance {
 #[cfg(test)]
 #[allow(clippy::restriction)] // test code: a panic fails the test
 mod tests {
+    use super::super::pivot::Pivot;
     use super::*;
     use crate::math::{Speed, TurnRate};
     use crate::model::state::Pose;
@@ -386,11 +387,8 @@ mod tests {
         let dt = Dt::from_micros_saturating(10_000);
         let quarter = (0.5 * core::f64::consts::PI / 2.5 / 0.01) as usize; // 2.5 rad/s
         let straight = (450.0 / 130.0 / 0.01) as usize; // 130 mm/s
-        let mut learned = Pivot::START;
-        (learned.behind, learned.var) = (60 << 16, 9 << 12);
-        learned.lever = super::super::pivot::lever_over_l(learned.behind);
-        learned.turn_lever = Lever::behind_axle(learned.behind);
-        for pivot in [learned, Pivot::START] {
+        let learned = Turning::of(60 << 16, 9 << 12);
+        for pivot in [learned, Pivot::START.turning] {
             for (motion, steps) in [
                 (Motion::Turn(TurnRate::from_mrad_s(2500)), quarter),
                 (Motion::Turn(TurnRate::from_mrad_s(-2500)), quarter),

@@ -41,6 +41,25 @@ struct Turn {
     corrections: u32,
 }
 
+/// What a turn's prediction takes from the learned pivot.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub(super) struct Turning {
+    /// `D + behind`, the turn's lever for the state update.
+    pub lever: Lever,
+    /// `(D + behind) / L`, Q31 ([`lever_over_l`]), and its square (Q30).
+    pub over_l: i32,
+    pub over_l_sq: i32,
+    /// The pivot's variance, Q12 mm^2.
+    pub var: i32,
+}
+
+impl Turning {
+    pub fn of(behind: i32, var: i32) -> Turning {
+        let over_l = lever_over_l(behind);
+        Turning { lever: Lever::behind_axle(behind), over_l, over_l_sq: crate::math::mul_hi(over_l, over_l), var }
+    }
+}
+
 /// The learned pivot and the turn it is learning from.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
 pub(super) struct Pivot {
@@ -50,10 +69,8 @@ pub(super) struct Pivot {
     /// added when a turn teaches it).
     pub var: i32,
     walked_us: u32,
-    /// `(D + behind) / L`, Q31 ([`lever_over_l`]).
-    pub lever: i32,
-    /// `D + behind`, the turn's lever for the state update.
-    pub turn_lever: Lever,
+    /// For the predictions.
+    pub turning: Turning,
     turn: Option<Turn>,
     /// Turns learned from.
     pub samples: u32,
@@ -71,9 +88,16 @@ const MIN_CHORD_SQ: i64 = {
 
 impl Pivot {
     /// About the axle, the config's initial uncertainty.
-    pub const START: Pivot = Pivot { behind: 0, var: P0_PIVOT, walked_us: 0,
-        lever: D_OVER_L_Q31,
-        turn_lever: Lever::AXLE,
+    pub const START: Pivot = Pivot {
+        behind: 0,
+        var: P0_PIVOT,
+        walked_us: 0,
+        turning: Turning {
+            lever: Lever::AXLE,
+            over_l: D_OVER_L_Q31,
+            over_l_sq: ((D_OVER_L_Q31 as i64 * D_OVER_L_Q31 as i64) >> 32) as i32,
+            var: P0_PIVOT,
+        },
         turn: None,
         samples: 0,
     };
@@ -103,9 +127,10 @@ impl Pivot {
     pub fn moved(&mut self, leader: u8, dx: i64, dy: i64) {
         if let Some(t) = &mut self.turn {
             if t.leader == leader {
-                t.moved_x = t.moved_x.saturating_add(dx);
-                t.moved_y = t.moved_y.saturating_add(dy);
-                t.corrections = t.corrections.saturating_add(1);
+                // (a turn's corrections are far below 2^63 in Q32 mm)
+                t.moved_x = t.moved_x.wrapping_add(dx);
+                t.moved_y = t.moved_y.wrapping_add(dy);
+                t.corrections = t.corrections.wrapping_add(1);
             }
         }
     }
@@ -142,8 +167,7 @@ impl Pivot {
         let (var, total) = (i64::from(self.var), i64::from(self.var) + sample_var);
         let (Some(step), Some(after)) = (div_i64(e * var, total), div_i64(var * sample_var, total)) else { return };
         self.behind = (i64::from(self.behind) + step).clamp(i64::from(PIVOT_MIN_Q16), i64::from(PIVOT_MAX_Q16)) as i32;
-        self.lever = lever_over_l(self.behind);
-        self.turn_lever = Lever::behind_axle(self.behind);
+        self.turning = Turning::of(self.behind, self.var);
         self.var = after.clamp(1, i64::from(P0_PIVOT)) as i32;
         self.samples = self.samples.saturating_add(1);
     }

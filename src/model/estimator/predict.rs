@@ -7,7 +7,7 @@ use super::constants::{
     P0_HEADING, P0_POS, P0_SPEED, P0_TURN, RAD_Q28_PER_LSB, SCALE_ONE, SCALE_WALK,
 };
 use super::covariance::{Covariance, BIAS, CCW, CW, SPEED, T, X, Y};
-use super::pivot::{swing_noise, Pivot};
+use super::pivot::{swing_noise, Turning};
 use crate::math::{mul_hi, Angle, Coord, Dt, Speed, TurnRate};
 use crate::model::actuator::Motion;
 use crate::model::state::{advance, advance_about, Pose};
@@ -83,7 +83,7 @@ impl Filter {
     /// Moves the pose by `motion` (the lines' motion; `scaled`, the same by
     /// this hypothesis's scales) held for `dt`, a turn about the learned
     /// `pivot`, and grows the uncertainty.
-    pub(super) fn predict(&mut self, motion: Motion, scaled: Motion, dt: Dt, pivot: &Pivot, bounds: &Bounds) {
+    pub(super) fn predict(&mut self, motion: Motion, scaled: Motion, dt: Dt, pivot: &Turning, bounds: &Bounds) {
         let dt_us = dt.as_micros();
         let p = &mut self.p;
         match (motion, scaled) {
@@ -110,14 +110,14 @@ impl Filter {
             (Motion::Turn(w0), Motion::Turn(_)) => {
                 let before = self.pose.theta;
                 let (s0, c0) = self.pose.sin_cos();
-                advance_about(&mut self.pose, scaled, dt, pivot.turn_lever);
+                advance_about(&mut self.pose, scaled, dt, pivot.lever);
                 let (s1, c1) = self.pose.sin_cos();
                 // The turn (model::state) about the pivot, R = D + p behind:
                 // x' = x - R (c0 - c1), y' = y - R (s0 - s1): dx'/dtheta = R
                 // (s0 - s1), dy'/dtheta = R (c1 - c0); halves of Q30 keep the
                 // differences in i32 (Q29), R/L Q31 times Q29 is Q28 from
                 // mul_hi, hence the << 2: far below 1/2 in Q30 for a step.
-                let lever = pivot.lever;
+                let lever = pivot.over_l;
                 let f1 = mul_hi(lever, (s0 >> 1) - (s1 >> 1)) << 2;
                 let f2 = mul_hi(lever, (c1 >> 1) - (c0 >> 1)) << 2;
                 // The turn's direction G = (-R s1 / L, R c1 / L, 1) (Q30, the

@@ -57,7 +57,7 @@ impl Estimator {
             (matches!(motion, Motion::Turn(_)), self.best_filter().pose.theta, self.best_id());
         let located = self.tracking == Tracking::Located;
         self.pivot.step(turning, theta, leader, self.clock_us, located);
-        let pivot = self.pivot;
+        let pivot = self.pivot.turning;
         let shared =
             if self.live > 1 { Some(Shared::of(self.best_filter(), motion, scaled, dt, &pivot)) } else { None };
         for (i, (h, _)) in self.live_mut().enumerate() {
@@ -74,7 +74,10 @@ impl Estimator {
         };
         self.odometer = self.odometer.wrapping_add(travel);
         self.clock_us = self.clock_us.wrapping_add(dt.as_micros());
-        advance_about(&mut self.reported, scaled, dt, pivot.turn_lever);
+        // (while unknown the reported pose is the best's: `follow`)
+        if self.tracking != Tracking::Unknown {
+            advance_about(&mut self.reported, scaled, dt, pivot.lever);
+        }
         if motion == Motion::Stop {
             if !self.standing {
                 self.slack = self.slack.min(CATCH_UP_STANDING_Q16);
