@@ -16,6 +16,13 @@ pub const AXLE_LENGTH: Length = Length::from_mm_f64(85.0);
 pub const ROTATION_TO_REFERENCE: Length = Length::from_mm_f64(56.0);
 /// The paper skid drags about 70 mm behind the axle (report 1).
 pub const SKID_BEHIND_AXLE: Length = Length::from_mm_f64(70.0);
+/// Half the body's width, mm: its widest point is the right lidar, 53 mm
+/// left of the reference point (`RIGHT_LIDAR`, fact sheet); the wheels
+/// are 42.5 mm to each side (`AXLE_LENGTH`). With the reference point in
+/// front and the skid behind, the body fits in a rectangle from the
+/// reference point back to the skid, this far to each side (the points
+/// the simulator keeps in the box, `sim::robot::body_fits`, all lie in it).
+pub const BODY_HALF_WIDTH: Length = Length::from_mm_f64(53.0);
 
 /// Front lidar: 50 mm behind the reference point, looking forward
 /// (fact sheet, from the team's later estimator; lateral offset not

@@ -1,6 +1,8 @@
 //! Going places on the estimate (`goto`, `face`) and the wall stop
 //! (`control::goto`, `control::tick`).
 
+use super::{geometry, Length};
+
 /// The wall stop: a forward motion stops when the front lidar reads a
 /// target closer than this to the reference point (the car's nose), mm.
 /// The reading is up to one timing budget (33 ms, 5 mm at 0.15 m/s)
@@ -50,3 +52,26 @@ pub const OBSTACLE_CONFIRM_MS: u32 = 70;
 /// Longest a `goto` or `face` may take, ms: the box's diagonal (0.9 m)
 /// at 0.13 m/s is 7 s, plus turns.
 pub const TIME_LIMIT_MS: u32 = 20_000;
+/// Where `goto` plans its turns in place to pivot, mm behind the axle.
+/// A turn pivots between the axle and the paper skid that drags 70 mm
+/// behind it (report 1), the skid's drag pulling the centre back; the
+/// robot's own has not been measured (the hard simulator draws 60 +- 20
+/// mm per run, `config::sim::HARD_PIVOT_BEHIND_AXLE_MM`, the lab's world
+/// 10). The skid is the conservative end for the walls: planned there,
+/// the body's swept circle (the rectangle of `config::geometry::
+/// BODY_HALF_WIDTH`, reference point to skid) reaches at most 19.3 mm past
+/// the planned one for any true pivot from 10 mm (8.0 mm past) to 80 mm
+/// (19.3) behind the axle, and 21.1 mm for one at the axle itself.
+pub const TURN_PIVOT_BEHIND_AXLE_MM: i32 = 70;
+/// That turning centre's distance behind the reference point (`D` plus
+/// the pivot): what `control::tick` passes to `control::goto::Nav::step`
+/// until the estimator learns the pivot.
+pub const TURN_CENTRE_BEHIND_REFERENCE: Length =
+    Length(geometry::ROTATION_TO_REFERENCE.0 + Length::from_mm(TURN_PIVOT_BEHIND_AXLE_MM).0);
+/// `goto` turns in place only where the body's swept circle about its
+/// turning centre clears every wall by this, mm (else it first drives
+/// along its heading until it does): the planned pivot's error, up to
+/// 19.3 mm for a true pivot from 10 to 80 mm behind the axle
+/// (`TURN_PIVOT_BEHIND_AXLE_MM`); the estimate's own error (the promised
+/// 20 mm) comes on top and is not covered.
+pub const TURN_WALL_MARGIN_MM: i32 = 20;

@@ -1,30 +1,44 @@
 //! Going to a point or a heading on the estimate: `goto` and `face`.
 //!
-//! The robot turns in place about its axle and drives straight; the pose
-//! it reports (and the target) is its reference point, `D` =
-//! [`config::geometry::ROTATION_TO_REFERENCE`] ahead of the axle. So the
-//! plan is made from the axle `A = P - D u` (`u` the heading's unit
-//! vector): turning in place leaves `A` where it is, and once the heading
-//! points from `A` at the target `T`, a straight leg of `|T - A| - D`
-//! (forward, or backward when the target is within `D` of the axle)
-//! brings the reference point onto it. Each tick [`Nav::step`] plans again
-//! from the newest estimate: a leg whose heading has drifted past
-//! [`config::goto::STEER_TOLERANCE_MDEG`] turns again, a leg ends where
-//! the target is abeam, and the goto ends when the reference point is
-//! within [`config::goto::ARRIVE_MM`] of the target.
+//! The robot turns in place about a turning centre `C` and drives
+//! straight; the pose it reports (and the target) is its reference point
+//! `P`. The caller says how far behind `P` the turns pivot, `c` (the axle's
+//! `D` = [`config::geometry::ROTATION_TO_REFERENCE`] if the wheels turned
+//! the body about their midpoint; a dragging skid pulls the centre further
+//! back: [`config::goto::TURN_CENTRE_BEHIND_REFERENCE`] until the
+//! estimator learns it). So the plan is made from `C = P - c u` (`u` the
+//! heading's unit vector): turning in place leaves `C` where it is, and
+//! once the heading points from `C` at the target `T`, a straight leg of
+//! `|T - C| - c` (forward, or backward when the target is within `c` of
+//! the centre) brings the reference point onto it. Each tick [`Nav::step`]
+//! plans again from the newest estimate: a leg whose heading has drifted
+//! past [`config::goto::STEER_TOLERANCE_MDEG`] turns again, a leg ends
+//! where the target is abeam, and the goto ends when the reference point
+//! is within [`config::goto::ARRIVE_MM`] of the target.
+//!
+//! A turn sweeps the body on a circle about `C` (`goto::room`). Before a
+//! turn begins, that circle must clear every wall by
+//! [`config::goto::TURN_WALL_MARGIN_MM`]; if it does not, the robot first
+//! drives along its heading, forward or backward, whichever moves `C`
+//! towards the safe middle of the box, until it does, then turns (once
+//! begun, a turn is not checked again, so the two never alternate). Where
+//! neither way along the heading makes room (it runs along a wall `C` is
+//! too near), it turns where it stands, as before. A `face` turns where it
+//! stands.
 //!
 //! Integer only: positions in 1/16 mm, angles as [`Angle`]s.
 
 use crate::config;
-use crate::math::{atan2, isqrt64, sin_cos, Angle, Speed, TurnRate};
+use crate::math::{atan2, isqrt64, sin_cos, Angle, Length, Speed, TurnRate};
 use crate::model::measurement::Arena;
 use crate::model::{Motion, Pose};
+use room::{may_drive, room, swept_radius, Room};
+
+mod room;
 
 /// Positions in 1/16 mm (`|x| <= 32767 mm` fits an i32 many times over).
 const Q4: u32 = 4;
-/// `D` in 1/16 mm.
-const D_Q4: i64 = (config::geometry::ROTATION_TO_REFERENCE.0 >> (16 - Q4)) as i64;
-/// Below this axle-to-target distance the bearing from the axle means
+/// Below this centre-to-target distance the bearing from the centre means
 /// little: the leg is driven straight without turning first (1/16 mm, 10 mm).
 const MIN_BEARING_Q4: i64 = 10 << Q4;
 /// A straight leg ends when the target is abeam within this, 1/16 mm
@@ -43,8 +57,13 @@ pub enum Target {
 /// What a [`Nav`] is doing now.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
 pub enum Leg {
+    /// Not moving yet.
+    Start,
+    /// Turning in place (its room was checked as it began).
     Turn,
     Straight,
+    /// Driving along the heading to make room for a turn.
+    Room,
 }
 
 /// A `goto` or `face` under way.
@@ -115,11 +134,13 @@ pub fn check_target(target: Target, arena: &Arena) -> Result<(), Refusal> {
 
 impl Nav {
     pub fn new(target: Target) -> Nav {
-        Nav { target, leg: Leg::Turn, obstacle_since: None, after_fix: false }
+        Nav { target, leg: Leg::Start, obstacle_since: None, after_fix: false }
     }
 
-    /// Plans this tick from the estimated `pose` (see the module docs).
-    pub fn step(&mut self, pose: &Pose) -> NavStep {
+    /// Plans this tick from the estimated `pose`, for turns pivoting
+    /// `centre_behind` behind the reference point, in `arena` (see the
+    /// module docs).
+    pub fn step(&mut self, pose: &Pose, centre_behind: Length, arena: &Arena) -> NavStep {
         let turn_tolerance = angle_lsb(config::goto::TURN_TOLERANCE_MDEG);
         let (tx, ty) = match self.target {
             Target::Heading(h) => {
@@ -128,36 +149,53 @@ impl Nav {
             }
             Target::Point { x_mm, y_mm } => (i64::from(x_mm) << Q4, i64::from(y_mm) << Q4),
         };
+        let c = i64::from(centre_behind.0 >> (16 - Q4));
         let (px, py) = (q4(pose.x.0), q4(pose.y.0));
         let (sin, cos) = sin_cos(pose.theta);
         let (ux, uy) = (i64::from(cos), i64::from(sin)); // Q30
-                                                         // target from the reference point and from the axle
+        let (cux, cuy) = (c.saturating_mul(ux) >> 30, c.saturating_mul(uy) >> 30);
+        // target from the reference point
         let (dx, dy) = (tx.saturating_sub(px), ty.saturating_sub(py));
         // along the heading from the reference point (Q4)
         let ahead = dx.saturating_mul(ux).saturating_add(dy.saturating_mul(uy)) >> 30;
         // there: a straight leg first drives on until the target is abeam
         if length(dx, dy) <= i64::from(config::goto::ARRIVE_MM) << Q4
-            && (self.leg == Leg::Turn || ahead.abs() <= ABEAM_Q4)
+            && (self.leg != Leg::Straight || ahead.abs() <= ABEAM_Q4)
         {
             return NavStep::Arrived;
         }
-        let (ax, ay) =
-            (dx.saturating_add(D_Q4.saturating_mul(ux) >> 30), dy.saturating_add(D_Q4.saturating_mul(uy) >> 30));
+        // target from the turning centre
+        let (ax, ay) = (dx.saturating_add(cux), dy.saturating_add(cuy));
         let r = length(ax, ay);
         let e = if r < MIN_BEARING_Q4 { 0 } else { bearing(ax, ay).diff(pose.theta) };
         let limit =
             if self.leg == Leg::Straight { angle_lsb(config::goto::STEER_TOLERANCE_MDEG) } else { turn_tolerance };
-        if e.unsigned_abs() > limit {
+        let v = Speed::from_mm_s(config::goto::SPEED_MM_S);
+        let wanted = if e.unsigned_abs() > limit {
+            Some(e)
+        } else if ahead.abs() <= ABEAM_Q4 {
+            // abeam but not there (a lateral miss): turn again from here
+            Some(if e == 0 { 1 } else { e })
+        } else {
+            None
+        };
+        if let Some(e) = wanted {
+            if self.leg != Leg::Turn {
+                // a turn begins: room for the body's sweep about the centre?
+                let (cx, cy) = (px.saturating_sub(cux), py.saturating_sub(cuy));
+                if let Room::Drive { forward } = room(cx, cy, ux, uy, swept_radius(c), arena) {
+                    // no obstacle check (`ahead_mm` 0): `may_drive` and the wall stop guard it
+                    if may_drive(px, py, ux, uy, forward, arena) {
+                        self.leg = Leg::Room;
+                        let v = if forward { v } else { v.neg() };
+                        return NavStep::Drive { motion: Motion::Straight(v), ahead_mm: 0 };
+                    }
+                }
+            }
             self.leg = Leg::Turn;
             return turn(e);
         }
-        if ahead.abs() <= ABEAM_Q4 {
-            // abeam but not there (a lateral miss): turn again from here
-            self.leg = Leg::Turn;
-            return turn(if e == 0 { 1 } else { e });
-        }
         self.leg = Leg::Straight;
-        let v = Speed::from_mm_s(config::goto::SPEED_MM_S);
         let ahead_mm = (ahead >> Q4) as i32; // |ahead| < 2^36 / 16: the box is far smaller
         NavStep::Drive { motion: Motion::Straight(if ahead > 0 { v } else { v.neg() }), ahead_mm }
     }
@@ -197,69 +235,4 @@ fn bearing(x: i64, y: i64) -> Angle {
 }
 
 #[cfg(test)]
-#[allow(clippy::restriction)] // test code: a panic fails the test
-mod tests {
-    use super::*;
-    use crate::math::Dt;
-    use crate::model::step;
-
-    fn pose(x: f64, y: f64, deg: f64) -> Pose {
-        Pose::new(crate::math::Coord::from_mm_f64(x), crate::math::Coord::from_mm_f64(y), Angle::from_degrees_f64(deg))
-    }
-
-    /// Runs the planner on the exact kinematics (`model::step`, 10 ms
-    /// ticks) and returns the pose it stops at and the ticks it took.
-    fn drive(start: Pose, target: Target) -> (Pose, u32) {
-        let mut nav = Nav::new(target);
-        let mut p = start;
-        for n in 0..5_000 {
-            match nav.step(&p) {
-                NavStep::Arrived => return (p, n),
-                NavStep::Drive { motion, .. } => p = step(&p, motion, Dt::from_micros_saturating(10_000)),
-            }
-        }
-        panic!("no arrival from {start:?} to {target:?}");
-    }
-
-    #[test]
-    fn goto_arrives_from_every_side_and_heading() {
-        let target = Target::Point { x_mm: 400, y_mm: 250 };
-        for (x, y) in [(150.0, 100.0), (650.0, 400.0), (400.0, 100.0), (390.0, 240.0), (420.0, 280.0), (400.0, 250.0)] {
-            for deg in [0.0, 45.0, 90.0, 179.0, 200.0, 315.0] {
-                let (p, ticks) = drive(pose(x, y, deg), target);
-                let miss = (p.x.to_mm_f64() - 400.0).hypot(p.y.to_mm_f64() - 250.0);
-                // within the tolerance; a goto that drove there ends with the
-                // target abeam (exact kinematics: 3.7 mm at most)
-                let bound = if ticks > 50 { 4.0 } else { f64::from(config::goto::ARRIVE_MM) + 0.1 };
-                assert!(miss <= bound, "from ({x}, {y}, {deg}): {miss:.1} mm off after {ticks} ticks");
-            }
-        }
-    }
-
-    #[test]
-    fn face_stops_within_its_tolerance_turning_the_short_way() {
-        for (from, to) in [(0.0, 90.0), (90.0, 0.0), (350.0, 10.0), (10.0, 350.0), (0.0, 179.0), (30.0, 30.5)] {
-            let (p, ticks) = drive(pose(300.0, 200.0, from), Target::Heading(Angle::from_degrees_f64(to)));
-            let off = (p.theta.diff(Angle::from_degrees_f64(to)) as f64 / 4_294_967_296.0 * 360.0).abs();
-            assert!(off <= 1.0, "{from} -> {to}: {off:.2} degrees off");
-            // the short way round at 2.4 rad/s (1.375 degrees a tick)
-            let mut turn = (to - from + 360.0) % 360.0;
-            if turn > 180.0 {
-                turn = 360.0 - turn;
-            }
-            assert!(f64::from(ticks) <= turn / 1.375 + 1.0, "{from} -> {to}: {ticks} ticks");
-        }
-    }
-
-    #[test]
-    fn targets_near_a_wall_or_outside_are_refused() {
-        let arena = Arena::DEFAULT; // 762.5 x 495
-        let m = config::goto::TARGET_WALL_MARGIN_MM;
-        assert_eq!(check_target(Target::Point { x_mm: m, y_mm: m }, &arena), Ok(()));
-        assert_eq!(check_target(Target::Point { x_mm: 762 - m, y_mm: 495 - m }, &arena), Ok(()));
-        for (x, y) in [(m - 1, 200), (200, m - 1), (763 - m, 200), (200, 496 - m), (-100, 200), (2000, 200)] {
-            assert_eq!(check_target(Target::Point { x_mm: x, y_mm: y }, &arena), Err(Refusal::TooNearWall), "{x} {y}");
-        }
-        assert_eq!(check_target(Target::Heading(Angle::ZERO), &arena), Ok(()));
-    }
-}
+mod tests;

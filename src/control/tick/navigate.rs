@@ -93,7 +93,9 @@ impl<H: Hardware> Controller<H> {
             self.localizing.then = Some(cmd);
             return;
         }
-        match nav.step(&self.estimator.pose()) {
+        // turns pivot where config says (until the estimator learns it)
+        let centre = config::goto::TURN_CENTRE_BEHIND_REFERENCE;
+        match nav.step(&self.estimator.pose(), centre, &self.estimator.arena()) {
             NavStep::Arrived => {
                 self.mode = Mode::Idle;
                 let p = self.estimator.pose();
