@@ -58,9 +58,13 @@ fn where_turns_pivot_is_learned_from_the_lidars() {
 fn a_localization_keeps_what_was_learned_and_a_typed_pose_forgets_it() {
     let mut robot =
         SimRobot::new(SimConfig { seed: 3, realism: pivoting(), locate_at_power_up: false, ..SimConfig::default() });
+    assert_eq!(robot.controller().estimator().learned_turn_centre(), None, "nothing learned before a turn");
     laps(&mut robot, 60.0);
     let learned = robot.controller().estimator().pivot();
     assert!(learned.0.to_mm_f64() > 30.0, "{learned:?}");
+    // what goto plans its turns about: D (56 mm) plus the learned pivot
+    let centre = robot.controller().estimator().learned_turn_centre().unwrap();
+    assert!((centre.to_mm_f64() - 56.0 - learned.0.to_mm_f64()).abs() < 1e-3, "{centre:?}");
     robot.send("locate");
     for _ in 0..(paperbot::config::locate::TIME_LIMIT_MS / 10) {
         robot.tick();
@@ -74,4 +78,5 @@ fn a_localization_keeps_what_was_learned_and_a_typed_pose_forgets_it() {
     robot.tick();
     let e = robot.controller().estimator();
     assert_eq!(e.pivot(), (paperbot::math::Length::ZERO, 0), "a typed pose starts over");
+    assert_eq!(e.learned_turn_centre(), None);
 }

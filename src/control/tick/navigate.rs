@@ -93,8 +93,8 @@ impl<H: Hardware> Controller<H> {
             self.localizing.then = Some(cmd);
             return;
         }
-        // turns pivot where config says (until the estimator learns it)
-        let centre = config::goto::TURN_CENTRE_BEHIND_REFERENCE;
+        // turns pivot where the estimator learned, or config says until then
+        let centre = self.estimator.learned_turn_centre().unwrap_or(config::goto::TURN_CENTRE_BEHIND_REFERENCE);
         match nav.step(&self.estimator.pose(), centre, &self.estimator.arena()) {
             NavStep::Arrived => {
                 self.mode = Mode::Idle;

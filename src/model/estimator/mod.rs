@@ -345,6 +345,13 @@ impl Estimator {
         (Length(self.pivot.behind), self.pivot.samples)
     }
 
+    /// How far behind the reference point turns in place pivot (`D` plus
+    /// the learned pivot), once a turn has taught it.
+    pub fn learned_turn_centre(&self) -> Option<Length> {
+        let p = &self.pivot;
+        (p.samples > 0).then(|| crate::config::geometry::ROTATION_TO_REFERENCE.saturating_add(Length(p.behind)))
+    }
+
     /// The live hypotheses: pose and cost (Q8, the best's 0).
     pub fn hypotheses(&self) -> impl Iterator<Item = (Pose, i32)> + '_ {
         self.hyps.iter().zip(self.costs.iter()).take(self.live).map(|(h, &c)| (h.pose, c))
