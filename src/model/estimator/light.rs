@@ -85,7 +85,13 @@ impl Shared {
             }
             _ => (0, 0),
         };
-        Shared { scaled, xy: xy.saturating_add(floor_xy), t: t.saturating_add(floor_t), turn_lever: pivot.lever, lever: pivot.over_l }
+        Shared {
+            scaled,
+            xy: xy.saturating_add(floor_xy),
+            t: t.saturating_add(floor_t),
+            turn_lever: pivot.lever,
+            lever: pivot.over_l,
+        }
     }
 }
 

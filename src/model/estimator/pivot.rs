@@ -85,6 +85,7 @@ const MIN_CHORD_SQ: i64 = {
     let x2 = rad * rad;
     ((x2 - x2 * x2 / 12.0) * 1_073_741_824.0) as i64
 };
+const _: () = assert!(cfg::PIVOT_MIN_TURN_DEG > 0.0 && cfg::PIVOT_MIN_TURN_DEG <= 60.0);
 
 impl Pivot {
     /// About the axle, the config's initial uncertainty.
@@ -110,7 +111,8 @@ impl Pivot {
         match (&mut self.turn, turning) {
             (Some(t), true) if t.leader == leader => t.last_us = clock_us,
             (_, true) => {
-                self.turn = Some(Turn { from: theta, leader, last_us: clock_us, moved_x: 0, moved_y: 0, corrections: 0 });
+                self.turn =
+                    Some(Turn { from: theta, leader, last_us: clock_us, moved_x: 0, moved_y: 0, corrections: 0 });
             }
             (Some(t), false) if clock_us.wrapping_sub(t.last_us) >= PIVOT_SETTLE_US => {
                 let t = *t;
@@ -201,7 +203,6 @@ mod tests {
     fn the_least_chord_is_two_minus_two_cos() {
         let rad = cfg::PIVOT_MIN_TURN_DEG.to_radians();
         let exact = (2.0 - 2.0 * rad.cos()) * f64::from(1 << 30);
-        assert!(cfg::PIVOT_MIN_TURN_DEG <= 60.0);
         assert!((MIN_CHORD_SQ as f64 - exact).abs() < 1e-4 * f64::from(1 << 30), "{MIN_CHORD_SQ} {exact}");
     }
 

@@ -3,8 +3,8 @@
 //! Jacobian (a few shears) and noise.
 
 use super::constants::{
-    BIAS_WALK, FLOOR_HEADING, FLOOR_POS, K_BIAS_MM, K_DIST, K_DRIFT, K_PIVOT, K_TURN, P0_BIAS,
-    P0_HEADING, P0_POS, P0_SPEED, P0_TURN, RAD_Q28_PER_LSB, SCALE_ONE, SCALE_WALK,
+    BIAS_WALK, FLOOR_HEADING, FLOOR_POS, K_BIAS_MM, K_DIST, K_DRIFT, K_PIVOT, K_TURN, P0_BIAS, P0_HEADING, P0_POS,
+    P0_SPEED, P0_TURN, RAD_Q28_PER_LSB, SCALE_ONE, SCALE_WALK,
 };
 use super::covariance::{Covariance, BIAS, CCW, CW, SPEED, T, X, Y};
 use super::pivot::{swing_noise, Turning};
