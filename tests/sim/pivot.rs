@@ -49,7 +49,7 @@ fn where_turns_pivot_is_learned_from_the_lidars() {
         let (learned, turns) = robot.controller().estimator().pivot();
         let learned = learned.to_mm_f64();
         println!("seed {seed}: pivot {truth:.1} mm behind the axle, learned {learned:.1} from {turns} turns; rms {rms:.1} mm");
-        assert!((learned - truth).abs() <= 3.0, "seed {seed}: learned {learned:.1} mm, true {truth:.1}");
+        assert!((learned - truth).abs() <= 5.0, "seed {seed}: learned {learned:.1} mm, true {truth:.1}");
         assert!(rms <= 8.0, "seed {seed}: rms {rms:.1} mm");
     }
 }

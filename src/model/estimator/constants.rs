@@ -168,7 +168,7 @@ const _: () = {
     assert!(P0_PIVOT > 0 && P0_PIVOT <= P_MAX && (PIVOT_WALK as u64) * 65_535 < (1 << 32));
     assert!(PIVOT_SAMPLE_VAR > 0 && PIVOT_SAMPLE_VAR <= P_MAX);
     // the turn's lever D + pivot within (0, 256) mm: (D + pivot) / L below
-    // 1 in Q31 (`predict::lever_over_l`), the pivot Q16 << 7 being Q31 / L
+    // 1 in Q31 (`pivot::lever_over_l`), the pivot Q16 << 7 being Q31 / L
     // for L = 256 mm; a step's Jacobian entries (D + p)/L times the sine's
     // change (below 0.2 rad a step) stay far below the shear's 1/2, G's
     // position entries below 1 (Q30)

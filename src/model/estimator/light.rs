@@ -45,7 +45,7 @@ pub(super) struct Shared {
     /// over `L` (Q31) for the Jacobian: a turn swings the secondaries
     /// about it too.
     pub turn_lever: Lever,
-    pub lever: i32,
+    pub over_l: i32,
 }
 
 impl Shared {
@@ -57,7 +57,6 @@ impl Shared {
     /// much turned by a factor sqrt 2 too little).
     pub fn of(f: &Filter, motion: Motion, scaled: Motion, dt: Dt, pivot: &Turning) -> Shared {
         let dt_us = dt.as_micros();
-
         let floor_xy = (FLOOR_POS.wrapping_mul(dt_us) >> 16) as i32;
         let floor_t = (FLOOR_HEADING.wrapping_mul(dt_us) >> 16) as i32;
         let (xy, t) = match (motion, scaled) {
@@ -90,7 +89,7 @@ impl Shared {
             xy: xy.saturating_add(floor_xy),
             t: t.saturating_add(floor_t),
             turn_lever: pivot.lever,
-            lever: pivot.over_l,
+            over_l: pivot.over_l,
         }
     }
 }
@@ -133,7 +132,7 @@ impl Filter {
             }
             Motion::Turn(_) => {
                 let (s1, c1) = self.pose.sin_cos();
-                let lever = shared.lever;
+                let lever = shared.over_l;
                 (mul_hi(lever, (s0 >> 1) - (s1 >> 1)) << 2, mul_hi(lever, (c1 >> 1) - (c0 >> 1)) << 2)
             }
             Motion::Stop => (0, 0),

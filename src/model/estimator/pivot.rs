@@ -169,8 +169,8 @@ impl Pivot {
         let (var, total) = (i64::from(self.var), i64::from(self.var) + sample_var);
         let (Some(step), Some(after)) = (div_i64(e * var, total), div_i64(var * sample_var, total)) else { return };
         self.behind = (i64::from(self.behind) + step).clamp(i64::from(PIVOT_MIN_Q16), i64::from(PIVOT_MAX_Q16)) as i32;
-        self.turning = Turning::of(self.behind, self.var);
         self.var = after.clamp(1, i64::from(P0_PIVOT)) as i32;
+        self.turning = Turning::of(self.behind, self.var);
         self.samples = self.samples.saturating_add(1);
     }
 }
