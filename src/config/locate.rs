@@ -131,9 +131,10 @@ pub const ROOM_MARGIN_MM: i32 = super::goto::TURN_WALL_MARGIN_MM;
 /// (up to 15 % in the hard world) makes of a 100 mm drive.
 pub const POSITION_SLACK_MM: i32 = 20;
 /// ... backing up at most this far from a wall seen ahead, mm: behind is
-/// unseen. Backing up 100 mm from near a wall, 8 of 200 lab surveys from
-/// random starts put the skid into the wall behind (a corner); 60 mm is
-/// the shortfall from a front reading of 68 mm.
+/// unseen (a corner behind). Of 200 surveys from random starts
+/// (`tests/sim/survey_room.rs`), 3 backing up 60 mm put the skid into a
+/// wall; 30 mm took 1 collision fewer in the lab's world and cost 4 right
+/// fixes (more turns with no room but for a wall square ahead).
 pub const MAX_BACK_UP_MM: i32 = 60;
 /// ... and drives forward or back at this speed, mm/s: `goto`'s
 /// (`goto::SPEED_MM_S`).

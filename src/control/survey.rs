@@ -165,10 +165,26 @@ pub struct Survey {
     view: ViewSums,
     /// The body has made its room before the first view.
     positioned: bool,
-    /// Turns taken so far, clockwise positive: turning back towards 0
-    /// sweeps ground already swept.
-    turned: i8,
+    sweep: Sweep,
     room: RoomLog,
+}
+
+/// Where the turns have taken the body, in turns of
+/// [`config::locate::TURN_DEG`] from the first view, clockwise positive;
+/// each pair indexed counterclockwise (0) and clockwise (1).
+#[derive(Clone, Copy, Debug)]
+struct Sweep {
+    at: i8,
+    /// The farthest turned each way: the ground between was swept, and a
+    /// view taken at every turn.
+    edges: [i8; 2],
+    /// The view (its index) taken at each edge.
+    edge_views: [usize; 2],
+    /// A turn that way was blocked (the compass showed it).
+    blocked: [bool; 2],
+    /// Steps of the turn under way: from where it is past the edge that
+    /// way (back over swept ground, then one step onto new).
+    steps: u8,
 }
 
 impl Default for Survey {
@@ -194,7 +210,7 @@ impl Survey {
                 headings: 0,
             },
             positioned: false,
-            turned: 0,
+            sweep: Sweep { at: 0, edges: [0, 0], edge_views: [0, 0], blocked: [false, false], steps: 1 },
             room: RoomLog { moved_mm: 0, reversed: 0, squeezed: 0, cut_short: false },
         }
     }
@@ -242,7 +258,9 @@ impl Survey {
             Phase::View => Action::Stand,
             Phase::Drive { ticks, .. } if self.ticks > *ticks => self.enter(Phase::Settle),
             Phase::Drive { forward, .. } => Action::Drive { forward: *forward },
-            Phase::Turn if self.ticks > TURN_TICKS => self.enter(Phase::Settle),
+            Phase::Turn if self.ticks > TURN_TICKS.saturating_mul(u32::from(self.sweep.steps)) => {
+                self.enter(Phase::Settle)
+            }
             Phase::Turn => Action::Turn { clockwise: self.clockwise },
             Phase::Settle if self.ticks > SETTLE_TICKS => {
                 self.view = ViewSums::default();
@@ -268,11 +286,25 @@ impl Survey {
                 return self.drive(mm);
             }
         }
-        if let Some(previous) = self.views().last() {
+        let previous = self.views().last().copied();
+        let sw = &mut self.sweep;
+        let way = usize::from(self.clockwise);
+        if let Some(previous) = previous {
             if r.heading.diff(previous.heading).saturating_abs() < BLOCKED {
+                if let Some(b) = sw.blocked.get_mut(way) {
+                    *b = true;
+                }
                 self.clockwise = !self.clockwise;
             } else {
-                self.turned = self.turned.saturating_add(if self.clockwise { 1 } else { -1 });
+                let step = if self.clockwise { sw.steps as i8 } else { (sw.steps as i8).saturating_neg() };
+                sw.at = sw.at.saturating_add(step);
+                let [ccw, cw] = &mut sw.edges;
+                (*ccw, *cw) = ((*ccw).min(sw.at), (*cw).max(sw.at));
+            }
+        }
+        for (edge, view) in sw.edges.iter().zip(sw.edge_views.iter_mut()) {
+            if *edge == sw.at {
+                *view = self.count;
             }
         }
         if let Some(slot) = self.views.get_mut(self.count) {
@@ -302,14 +334,16 @@ impl Survey {
         self.enter(Phase::Drive { forward: mm > 0, ticks: ticks(ms.unwrap_or(0)) })
     }
 
-    /// The next turn, the way the newest view shows room for, or the
-    /// search of the views there are when neither way has room.
+    /// The next turn, past the edge of the swept ground the view taken
+    /// there shows room beyond, or the search of the views there are when
+    /// neither way has room.
     fn turn(&mut self) -> Action {
-        let Some(&view) = self.views().last() else { return self.enter(Phase::Turn) };
-        let turned = self.turned;
+        let sw = self.sweep;
+        let views = self.views();
         let room = |clockwise: bool, ahead: Ahead| {
-            // back towards the first view's heading: ground already swept
-            (if clockwise { turned < 0 } else { turned > 0 }) || room::room_to_turn(&view, clockwise, ahead)
+            let way = usize::from(clockwise);
+            let edge_view = sw.edge_views.get(way).and_then(|&i| views.get(i));
+            sw.blocked.get(way) == Some(&false) && edge_view.is_some_and(|v| room::room_to_turn(v, clockwise, ahead))
         };
         let few = self.count < config::locate::MIN_VIEWS;
         let way = [(self.clockwise, Ahead::Slanted), (!self.clockwise, Ahead::Slanted)]
@@ -331,6 +365,9 @@ impl Survey {
         if ahead == Ahead::Square {
             self.room.squeezed = self.room.squeezed.saturating_add(1);
         }
+        let [ccw, cw] = sw.edges;
+        let steps = if clockwise { cw.saturating_sub(sw.at) } else { sw.at.saturating_sub(ccw) };
+        self.sweep.steps = steps.saturating_add(1).unsigned_abs();
         self.enter(Phase::Turn)
     }
 

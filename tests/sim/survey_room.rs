@@ -28,37 +28,8 @@ fn lab_with_hard_pivot() -> Realism {
 fn survey(start: PoseF64, seed: u64, realism: Realism) -> (u32, String, f64) {
     let mut robot = SimRobot::new(SimConfig { start, seed, realism, ..SimConfig::default() });
     robot.send("rate 0");
-    let mut collisions = 0;
-    let mut cut = false;
     for _ in 0..(config::locate::TIME_LIMIT_MS + 1_000) / 10 {
         robot.tick();
-        if collisions == 0 && robot.collisions() > 0 && std::env::var("SURVEY_WHERE").is_ok() {
-            let s = robot.controller().survey();
-            println!(
-                "  collision from ({:.0}, {:.0}, {:.0} deg): views {}, {:?}, motion {:?}",
-                start.x,
-                start.y,
-                start.theta.to_degrees(),
-                s.views().len(),
-                s.room(),
-                robot.controller().applied().motion
-            );
-        }
-        collisions = robot.collisions();
-        if std::env::var("SURVEY_CUT").is_ok() && robot.controller().survey().room().cut_short && !cut {
-            cut = true;
-            let s = robot.controller().survey();
-            let mm = |l: Option<paperbot::math::Length>| l.map(|l| l.to_mm());
-            let v: Vec<_> = s.views().iter().map(|r| (mm(r.front), mm(r.right))).collect();
-            println!(
-                "  cut short from ({:.0}, {:.0}, {:.0} deg): {:?} views {v:?} truth {:?}",
-                start.x,
-                start.y,
-                start.theta.to_degrees(),
-                s.room(),
-                robot.truth()
-            );
-        }
         if let Some(line) = robot.take_output().into_iter().find(|l| l.starts_with("# locate")) {
             let s = robot.sample();
             return (robot.collisions(), line, s.truth.distance(&s.estimate));

@@ -157,16 +157,25 @@ fn no_room_on_the_right_turns_counterclockwise() {
 }
 
 #[test]
-fn a_wall_ahead_after_a_turn_turns_back_over_swept_ground() {
+fn a_wall_ahead_after_a_turn_turns_back_over_swept_ground_and_past_it() {
     let mut s = Survey::new();
     assert_eq!(view(&mut s, 0, Some(aim()), Some(300)), Action::Stand);
     assert_eq!(run(&mut s, Action::Stand).1, Action::Turn { clockwise: true });
-    to_next_view(&mut s, Action::Turn { clockwise: true });
+    let one = to_next_view(&mut s, Action::Turn { clockwise: true }) + 1;
+    assert_eq!(one, TURN_TICKS);
     settle(&mut s);
     // the nose now 60 mm from a wall: no turn on into new ground, but back
+    // over the swept ground and one step past the first view (whose front
+    // showed room), in one turn
     assert_eq!(view(&mut s, 45, Some(60), Some(300)), Action::Stand);
     assert_eq!(run(&mut s, Action::Stand).1, Action::Turn { clockwise: false });
+    assert_eq!(to_next_view(&mut s, Action::Turn { clockwise: false }) + 1, 2 * TURN_TICKS);
+    settle(&mut s);
     assert_eq!(s.room(), RoomLog { moved_mm: 0, reversed: 1, squeezed: 0, cut_short: false });
+    // on counterclockwise one step at a time, while there is room ahead
+    assert_eq!(view(&mut s, 315, Some(aim()), Some(300)), Action::Stand);
+    assert_eq!(run(&mut s, Action::Stand).1, Action::Turn { clockwise: false });
+    assert_eq!(to_next_view(&mut s, Action::Turn { clockwise: false }) + 1, TURN_TICKS);
 }
 
 #[test]
