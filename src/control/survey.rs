@@ -16,10 +16,11 @@
 //! 2. A turn in place of [`config::locate::TURN_DEG`], clockwise first, a settle of
 //!    [`config::locate::SETTLE_MS`], and the next view. When the compass shows that a
 //!    turn moved less than [`config::locate::BLOCKED_TURN_DEG`] (the body against a
-//!    wall), the next turns go the other way. Before each turn the newest
-//!    view must show room for it ([`room::room_to_turn`]; turning back
-//!    over ground already swept needs none); else it turns the other way,
-//!    and when neither way has room the views taken are all there are.
+//!    wall), the next turns go the other way. A turn must have room
+//!    ([`room::room_to_turn`]) as the view taken at the edge of the swept
+//!    ground that way shows; else it goes the other way, back over the
+//!    swept ground and one step past its other edge in one turn; when
+//!    neither way has room the views taken are all there are.
 //! 3. From [`config::locate::MIN_VIEWS`] views on, the search after each view
 //!    ([`config::locate::SCORES_PER_TICK`] view scores a tick): a fix that is not
 //!    ambiguous and is certain enough for `goto`
