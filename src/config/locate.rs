@@ -126,15 +126,17 @@ pub const TURN_CENTRE_BEHIND_REFERENCE: super::Length = super::goto::TURN_CENTRE
 /// pivot's error (`goto::TURN_WALL_MARGIN_MM`).
 pub const ROOM_MARGIN_MM: i32 = super::goto::TURN_WALL_MARGIN_MM;
 /// Before its first view, the survey drives until the wall ahead reads
-/// this much more than a turn wants (`FRONT_REACH_HALVES`), mm: four
-/// sigmas of a view's median reading, and what the wheels' speed error
-/// (up to 15 % in the hard world) makes of a 100 mm drive.
+/// this much more than a turn wants (`FRONT_REACH_HALVES`), mm: a view's
+/// median reading is within about 1 mm, but the wheels' speed (up to 15 %
+/// off in the hard world, `sim::realism`) makes a planned 130 mm drive up
+/// to 20 mm longer.
 pub const POSITION_SLACK_MM: i32 = 20;
 /// ... backing up at most this far from a wall seen ahead, mm: behind is
-/// unseen (a corner behind). Of 200 surveys from random starts
-/// (`tests/sim/survey_room.rs`), 3 backing up 60 mm put the skid into a
-/// wall; 30 mm took 1 collision fewer in the lab's world and cost 4 right
-/// fixes (more turns with no room but for a wall square ahead).
+/// unseen (a corner behind). Of 1,000 surveys from random starts in each
+/// of the three worlds (`tests/sim/survey_room.rs`), 36 touch a wall
+/// backing up; 30 mm (200 starts each, an earlier survey) took 1 such
+/// collision fewer in the lab's world and cost 4 right fixes (more turns
+/// with room only for a wall square ahead).
 pub const MAX_BACK_UP_MM: i32 = 60;
 /// ... and drives forward or back at this speed, mm/s: `goto`'s
 /// (`goto::SPEED_MM_S`).
