@@ -116,3 +116,37 @@ pub const SCORES_PER_TICK: u32 = 170;
 /// The whole procedure's time limit, ms: eight views (5 s) and a
 /// search that tries every heading (50 passes, 39 s).
 pub const TIME_LIMIT_MS: u32 = 60_000;
+/// The survey's turns in place are planned to pivot this far behind the
+/// reference point, mm: `goto`'s planned centre (`goto::TURN_CENTRE_
+/// BEHIND_REFERENCE`, at the skid), the conservative end for the walls;
+/// the pivot is not learned before the first turn.
+pub const TURN_CENTRE_BEHIND_REFERENCE: super::Length = super::goto::TURN_CENTRE_BEHIND_REFERENCE;
+/// The survey turns where its readings show the body's swept circle about
+/// that centre clears the walls seen by this, mm: `goto`'s margin for the
+/// pivot's error (`goto::TURN_WALL_MARGIN_MM`).
+pub const ROOM_MARGIN_MM: i32 = super::goto::TURN_WALL_MARGIN_MM;
+/// Before its first view, the survey drives until the wall ahead reads
+/// this much more than a turn wants (`FRONT_REACH_HALVES`), mm: a view's
+/// median reading is within about 1 mm, but the wheels' speed (up to 15 %
+/// off in the hard world, `sim::realism`) makes a planned 130 mm drive up
+/// to 20 mm longer.
+pub const POSITION_SLACK_MM: i32 = 20;
+/// ... backing up at most this far from a wall seen ahead, mm: behind is
+/// unseen (a corner behind). Of 1,000 surveys from random starts in each
+/// of the three worlds (`tests/sim/survey_room.rs`), 36 touch a wall
+/// backing up; 30 mm (200 starts each, an earlier survey) took 1 such
+/// collision fewer in the lab's world and cost 4 right fixes (more turns
+/// with room only for a wall square ahead).
+pub const MAX_BACK_UP_MM: i32 = 60;
+/// ... and drives forward or back at this speed, mm/s: `goto`'s
+/// (`goto::SPEED_MM_S`).
+pub const POSITION_MM_S: i32 = super::goto::SPEED_MM_S;
+/// Before each turn the newest view must show the wall ahead at least
+/// this many times the reach (the swept radius and margin) from the
+/// turning centre, in halves: a wall met at a slant of up to 48 degrees
+/// (cos = 2/3) then clears the swept circle (with the centre 126 mm
+/// behind the nose, a front reading of 108 mm). (The reach itself, the first
+/// try, cut half the lab's surveys short at their first view: the drive
+/// before it leaves the wall ahead at about the reach, give or take the
+/// reading's noise.)
+pub const FRONT_REACH_HALVES: i32 = 3;

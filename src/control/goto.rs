@@ -34,7 +34,7 @@ use crate::model::measurement::Arena;
 use crate::model::{Motion, Pose};
 use room::{may_drive, room, swept_radius, Room};
 
-mod room;
+pub(crate) mod room;
 
 /// Positions in 1/16 mm (`|x| <= 32767 mm` fits an i32 many times over).
 const Q4: u32 = 4;

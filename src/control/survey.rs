@@ -7,10 +7,20 @@
 //!    readings, and each lidar's distance, the median of
 //!    [`config::locate::LIDAR_READINGS`], taken standing (at most
 //!    [`config::locate::VIEW_LIMIT_MS`]).
+//!    Before the first, the body makes room to turn from the readings
+//!    of a view taken standing ([`room::positioning_mm`]): it backs up
+//!    from a wall ahead, or drives forward clear of one that may be right
+//!    behind, stands [`config::locate::SETTLE_MS`], and takes the first
+//!    view there (the views are then joined by turns in place only, as the
+//!    search assumes).
 //! 2. A turn in place of [`config::locate::TURN_DEG`], clockwise first, a settle of
 //!    [`config::locate::SETTLE_MS`], and the next view. When the compass shows that a
 //!    turn moved less than [`config::locate::BLOCKED_TURN_DEG`] (the body against a
-//!    wall), the next turns go the other way.
+//!    wall), the next turns go the other way. A turn must have room
+//!    ([`room::room_to_turn`]) as the view taken at the edge of the swept
+//!    ground that way shows; else it goes the other way, back over the
+//!    swept ground and one step past its other edge in one turn; when
+//!    neither way has room the views taken are all there are.
 //! 3. From [`config::locate::MIN_VIEWS`] views on, the search after each view
 //!    ([`config::locate::SCORES_PER_TICK`] view scores a tick): a fix that is not
 //!    ambiguous and is certain enough for `goto`
@@ -33,9 +43,16 @@
 use crate::config;
 use crate::config::timing::LOOP_HZ;
 use crate::control::goto::position_steerable;
-use crate::math::{div_i64, Angle, Length};
+use crate::math::{Angle, Length};
 use crate::model::locate::{Fix, LocateError, Readings, Search, MAX_VIEWS};
 use crate::model::measurement::{Arena, LidarId};
+
+pub mod room;
+mod view;
+use room::Ahead;
+use view::ViewSums;
+#[cfg(test)]
+mod tests;
 
 /// Why there is no fix.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
@@ -82,6 +99,11 @@ pub enum Action {
     Turn {
         clockwise: bool,
     },
+    /// Drive straight at [`config::locate::POSITION_MM_S`] (making room
+    /// before the first view).
+    Drive {
+        forward: bool,
+    },
     Done(Result<Fix, Failure>),
 }
 
@@ -92,61 +114,14 @@ pub enum Action {
 enum Phase {
     /// Taking a view's readings.
     View,
+    /// Making room before the first view: this many ticks.
+    Drive {
+        forward: bool,
+        ticks: u32,
+    },
     Turn,
     Settle,
     Search(Search),
-}
-
-/// One lidar's distances in a view.
-type Distances = heapless::Vec<Length, { config::locate::LIDAR_READINGS as usize }>;
-
-/// A view's readings as they come.
-#[derive(Clone, Default, Debug)]
-struct ViewSums {
-    front: Distances,
-    right: Distances,
-    /// The first heading, and the sum of the others' differences from it
-    /// (a mean that does not wrap at north).
-    first_heading: Option<Angle>,
-    heading_diffs: i64,
-    headings: u8,
-}
-
-impl ViewSums {
-    fn complete(&self) -> bool {
-        self.front.is_full() && self.right.is_full() && self.headings >= config::locate::COMPASS_READINGS
-    }
-
-    /// The view: the lidars' medians (a glancing beam's spurious echo
-    /// among them does not move it) and the compass's mean (`None`: no
-    /// compass heading).
-    fn readings(&mut self) -> Option<Readings> {
-        let first = self.first_heading?;
-        let diff = div_i64(self.heading_diffs, i64::from(self.headings)).unwrap_or(0);
-        Some(Readings {
-            heading: first.wrapping_add(Angle(diff as u32)),
-            front: median(&mut self.front),
-            right: median(&mut self.right),
-        })
-    }
-}
-
-/// The middle of `d` (the lower of the two middles of an even count), by
-/// an insertion sort of its few readings (core's sort brings panic paths
-/// and their messages into the image).
-fn median(d: &mut Distances) -> Option<Length> {
-    for i in 1..d.len() {
-        let mut j = i;
-        while let (Some(&a), Some(&b)) = (d.get(j.wrapping_sub(1)), d.get(j)) {
-            if a <= b {
-                break;
-            }
-            let k = j.wrapping_sub(1); // j >= 1: d.get(j - 1) was Some
-            d.swap(k, j);
-            j = k;
-        }
-    }
-    d.get(d.len().saturating_sub(1) / 2).copied()
 }
 
 /// Loop ticks in `ms` (whole ticks, rounded down; const-evaluated).
@@ -163,6 +138,22 @@ const VIEW_TICKS: u32 = ticks(config::locate::VIEW_LIMIT_MS);
 const BLOCKED: i32 = (config::locate::BLOCKED_TURN_DEG as i64 * (1 << 32) / 360) as i32;
 const _: () = assert!(config::locate::MIN_VIEWS >= 1 && config::locate::MIN_VIEWS <= MAX_VIEWS && TURN_TICKS > 0);
 
+/// What the survey did to keep the body off the walls (see [`room`]).
+#[derive(Clone, Copy, Default, PartialEq, Eq, Debug)]
+pub struct RoomLog {
+    /// The drive before the first view, mm, forward positive (as planned:
+    /// the wheels' true distance may differ).
+    pub moved_mm: i32,
+    /// Turns taken the other way than the last one because the view showed
+    /// no room for it (the first turn counterclockwise included).
+    pub reversed: u8,
+    /// Turns taken with room only for a wall square ahead (before the
+    /// search had its views).
+    pub squeezed: u8,
+    /// Neither way had room: the survey took the views it had.
+    pub cut_short: bool,
+}
+
 /// The procedure (see the module docs).
 #[derive(Clone, Debug)]
 pub struct Survey {
@@ -173,6 +164,28 @@ pub struct Survey {
     ticks: u32,
     clockwise: bool,
     view: ViewSums,
+    /// The body has made its room before the first view.
+    positioned: bool,
+    sweep: Sweep,
+    room: RoomLog,
+}
+
+/// Where the turns have taken the body, in turns of
+/// [`config::locate::TURN_DEG`] from the first view, clockwise positive;
+/// each pair indexed counterclockwise (0) and clockwise (1).
+#[derive(Clone, Copy, Debug)]
+struct Sweep {
+    at: i8,
+    /// The farthest turned each way: the ground between was swept, and a
+    /// view taken at every turn.
+    edges: [i8; 2],
+    /// The view (its index) taken at each edge.
+    edge_views: [usize; 2],
+    /// A turn that way was blocked (the compass showed it).
+    blocked: [bool; 2],
+    /// Steps of the turn under way: from where it is past the edge that
+    /// way (back over swept ground, then one step onto new).
+    steps: u8,
 }
 
 impl Default for Survey {
@@ -197,7 +210,15 @@ impl Survey {
                 heading_diffs: 0,
                 headings: 0,
             },
+            positioned: false,
+            sweep: Sweep { at: 0, edges: [0, 0], edge_views: [0, 0], blocked: [false, false], steps: 1 },
+            room: RoomLog { moved_mm: 0, reversed: 0, squeezed: 0, cut_short: false },
         }
+    }
+
+    /// What the survey did to keep off the walls so far.
+    pub fn room(&self) -> RoomLog {
+        self.room
     }
 
     /// Views taken so far.
@@ -236,7 +257,11 @@ impl Survey {
         match &mut self.phase {
             Phase::View if self.view.complete() || self.ticks > VIEW_TICKS => self.view_taken(),
             Phase::View => Action::Stand,
-            Phase::Turn if self.ticks > TURN_TICKS => self.enter(Phase::Settle),
+            Phase::Drive { ticks, .. } if self.ticks > *ticks => self.enter(Phase::Settle),
+            Phase::Drive { forward, .. } => Action::Drive { forward: *forward },
+            Phase::Turn if self.ticks > TURN_TICKS.saturating_mul(u32::from(self.sweep.steps)) => {
+                self.enter(Phase::Settle)
+            }
             Phase::Turn => Action::Turn { clockwise: self.clockwise },
             Phase::Settle if self.ticks > SETTLE_TICKS => {
                 self.view = ViewSums::default();
@@ -255,9 +280,32 @@ impl Survey {
         let Some(r) = self.view.readings() else {
             return Action::Done(Err(Failure::NoHeading));
         };
-        if let Some(previous) = self.views().last() {
+        if !self.positioned {
+            self.positioned = true;
+            let mm = room::positioning_mm(r.front);
+            if mm != 0 {
+                return self.drive(mm);
+            }
+        }
+        let previous = self.views().last().copied();
+        let sw = &mut self.sweep;
+        let way = usize::from(self.clockwise);
+        if let Some(previous) = previous {
             if r.heading.diff(previous.heading).saturating_abs() < BLOCKED {
+                if let Some(b) = sw.blocked.get_mut(way) {
+                    *b = true;
+                }
                 self.clockwise = !self.clockwise;
+            } else {
+                let step = if self.clockwise { sw.steps as i8 } else { (sw.steps as i8).saturating_neg() };
+                sw.at = sw.at.saturating_add(step);
+                let [ccw, cw] = &mut sw.edges;
+                (*ccw, *cw) = ((*ccw).min(sw.at), (*cw).max(sw.at));
+            }
+        }
+        for (edge, view) in sw.edges.iter().zip(sw.edge_views.iter_mut()) {
+            if *edge == sw.at {
+                *view = self.count;
             }
         }
         if let Some(slot) = self.views.get_mut(self.count) {
@@ -265,24 +313,75 @@ impl Survey {
             self.count = self.count.saturating_add(1);
         }
         if self.count < config::locate::MIN_VIEWS {
-            return self.enter(Phase::Turn);
+            return self.turn();
         }
+        self.search()
+    }
+
+    /// The search of the views so far.
+    fn search(&mut self) -> Action {
         match Search::new(self.views()) {
             Ok(search) => self.enter(Phase::Search(search)),
             Err(e) => self.searched(Err(e.into())),
         }
     }
 
+    /// Drives `mm` (forward positive) to make room before the first view.
+    fn drive(&mut self, mm: i32) -> Action {
+        self.room.moved_mm = mm;
+        // ms = mm * 1000 / (mm/s), whole ticks (a planned drive of at most
+        // a few hundred mm: no overflow)
+        let ms = mm.unsigned_abs().saturating_mul(1000).checked_div(config::locate::POSITION_MM_S.unsigned_abs());
+        self.enter(Phase::Drive { forward: mm > 0, ticks: ticks(ms.unwrap_or(0)) })
+    }
+
+    /// The next turn, past the edge of the swept ground the view taken
+    /// there shows room beyond, or the search of the views there are when
+    /// neither way has room.
+    fn turn(&mut self) -> Action {
+        let sw = self.sweep;
+        let views = self.views();
+        let room = |clockwise: bool, ahead: Ahead| {
+            let way = usize::from(clockwise);
+            let edge_view = sw.edge_views.get(way).and_then(|&i| views.get(i));
+            sw.blocked.get(way) == Some(&false) && edge_view.is_some_and(|v| room::room_to_turn(v, clockwise, ahead))
+        };
+        let few = self.count < config::locate::MIN_VIEWS;
+        let way = [(self.clockwise, Ahead::Slanted), (!self.clockwise, Ahead::Slanted)]
+            .into_iter()
+            .chain(
+                few.then_some([(self.clockwise, Ahead::Square), (!self.clockwise, Ahead::Square)])
+                    .into_iter()
+                    .flatten(),
+            )
+            .find(|&(clockwise, ahead)| room(clockwise, ahead));
+        let Some((clockwise, ahead)) = way else {
+            self.room.cut_short = true;
+            return self.search();
+        };
+        if clockwise != self.clockwise {
+            self.clockwise = clockwise;
+            self.room.reversed = self.room.reversed.saturating_add(1);
+        }
+        if ahead == Ahead::Square {
+            self.room.squeezed = self.room.squeezed.saturating_add(1);
+        }
+        let [ccw, cw] = sw.edges;
+        let steps = if clockwise { cw.saturating_sub(sw.at) } else { sw.at.saturating_sub(ccw) };
+        self.sweep.steps = steps.saturating_add(1).unsigned_abs();
+        self.enter(Phase::Turn)
+    }
+
     /// A search's answer: the end, or another view.
     fn searched(&mut self, result: Result<Fix, Failure>) -> Action {
-        let last_view = self.count >= MAX_VIEWS;
+        let last_view = self.count >= MAX_VIEWS || self.room.cut_short;
         match result {
             // (the fix's heading is the compass's, within goto's limit)
             Ok(fix) if (!fix.ambiguous && position_steerable(fix.sigma_x, fix.sigma_y, 1)) || last_view => {
                 Action::Done(Ok(fix))
             }
             Err(e) if last_view => Action::Done(Err(e)),
-            _ => self.enter(Phase::Turn),
+            _ => self.turn(),
         }
     }
 

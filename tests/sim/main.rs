@@ -10,3 +10,4 @@ mod pivot;
 mod realism;
 mod realistic_hour;
 mod simulate;
+mod survey_room;

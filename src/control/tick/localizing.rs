@@ -7,7 +7,7 @@ use super::clock::Timer;
 use super::{Controller, Hardware, LineSink, Mode};
 use crate::config;
 use crate::control::protocol::number::{push_fixed_parts, push_i32, push_str, push_u32};
-use crate::math::TurnRate;
+use crate::math::{Speed, TurnRate};
 use crate::model::locate::Fix;
 use crate::model::measurement::LidarId;
 use crate::model::Motion;
@@ -68,6 +68,10 @@ impl<H: Hardware> Controller<H> {
             Action::Turn { clockwise } => {
                 let rate = TurnRate::from_mrad_s(config::locate::TURN_MRAD_S);
                 Motion::Turn(if clockwise { rate } else { rate.neg() })
+            }
+            Action::Drive { forward } => {
+                let speed = Speed::from_mm_s(config::locate::POSITION_MM_S);
+                Motion::Straight(if forward { speed } else { speed.neg() })
             }
         };
         if let Mode::Locate { drive, .. } = &mut self.mode {
