@@ -6,7 +6,7 @@
 //! A turn in place sweeps the body on a circle of radius `R` about its
 //! turning centre, [`config::locate::TURN_CENTRE_BEHIND_REFERENCE`] behind
 //! the reference point (`R`: the body's farthest corner from it,
-//! [`swept_radius`]). The survey wants `R` plus [`config::locate::ROOM_MARGIN_MM`]
+//! `control::goto::room::swept_radius`). The survey wants `R` plus [`config::locate::ROOM_MARGIN_MM`]
 //! (the reach) of room around the centre:
 //!
 //! - Ahead, the front lidar reads from the reference point, the centre's
