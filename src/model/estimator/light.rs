@@ -21,9 +21,9 @@ use super::constants::{
 use super::covariance::{Covariance, BIAS, CCW, CW, SPEED, T, X, Y};
 use super::pivot::{swing_noise, Turning};
 use super::predict::{Bounds, Filter};
-use super::update::{gate_bound, normalised_square, over_s, scale_shift, Outcome, Row};
+use super::update::{over_s, scale_shift, scaling, Outcome, Row, Scaling};
 use super::Update;
-use crate::math::{mul_hi, mul_q30, mul_wide, normalize, reciprocal, shift, Angle, Coord, Dt};
+use crate::math::{mul_hi, mul_q30, mul_wide, shift, Angle, Coord, Dt};
 use crate::model::actuator::Motion;
 use crate::model::state::{advance_about, Lever};
 
@@ -175,29 +175,16 @@ impl Filter {
     /// for innovation `nu` (Q16 mm), row `h` (on `x`, `y`, `theta` only),
     /// noise `r` (Q12 mm^2, `0 < r <= P_MAX`), gated; the same arithmetic
     /// on three states. Returns the outcome and the repairs made.
-    // tick bar (four hypotheses): the gate and scaling are written out as
-    // in `Filter::correct`, not shared: one inlined helper for both cost
-    // 181 instructions (15,026 of the 15,000 bar, measured)
     pub(super) fn correct_pose(&mut self, h: Row, nu: i32, r: i32, bounds: &Bounds) -> (Outcome, u32) {
         self.pay();
         let (b, hph, k) = project_pose(&self.p, h);
         let s = hph.max(0) + (r >> k).max(1);
-        if mul_wide(nu, nu) >> 4 > gate_bound(s, k) {
-            return (Outcome { update: Update::Outlier, nis_q8: 0, nu }, 0);
-        }
-        let (sn, ns) = normalize(s as u32); // s > 0
-        let y = reciprocal(sn);
-        let nis_q8 = normalised_square(nu, y, ns, k);
         let mb = b.iter().fold(0u32, |m, v| m | v.unsigned_abs());
-        if mb == 0 {
-            return (Outcome { update: Update::Accepted, nis_q8, nu }, 0);
-        }
-        let sb = normalize(mb).1 - 2;
+        let Scaling { y, ns, sb, ek, nis_q8 } = match scaling(nu, s, k, mb) {
+            Ok(sc) => sc,
+            Err(done) => return done,
+        };
         let t: [i32; 3] = core::array::from_fn(|i| over_s(b.get(i).copied().unwrap_or(0), sb, y));
-        let ek = ns as i32 - sb as i32 - 9;
-        if ek > 2 {
-            return (Outcome { update: Update::Outlier, nis_q8: 0, nu }, 1);
-        }
         let gain = |i: usize| shift(t.get(i).copied().unwrap_or(0), ek);
         self.pose.x = Coord(self.pose.x.0.wrapping_add(mul_wide(gain(X), nu) >> 5));
         self.pose.y = Coord(self.pose.y.0.wrapping_add(mul_wide(gain(Y), nu) >> 5));

@@ -132,35 +132,16 @@ impl Filter {
     /// correction"). Returns the outcome and the repairs made.
     pub(super) fn correct(&mut self, h: Row, nu: i32, r: i32, bounds: &Bounds) -> (Outcome, u32) {
         let (b, s, k) = innovation(&self.p, h, r);
-        // Gate: nu^2 (Q32, <= 2^62; >> 4: Q28) against gate^2 S.
-        if mul_wide(nu, nu) >> 4 > gate_bound(s, k) {
-            return (Outcome { nu, ..Outcome::not(Update::Outlier) }, 0);
-        }
-        // 1/S = y 2^(ns - 62): S normalised to [2^31, 2^32), its reciprocal
-        // by two Newton steps (no division).
-        let (sn, ns) = normalize(s as u32); // s > 0
-        let y = reciprocal(sn);
-        let nis_q8 = normalised_square(nu, y, ns, k);
-        // b normalised too: beta = b 2^sb with max |beta| in [2^29, 2^30).
         let mb = b.iter().fold(0u32, |m, v| m | v.unsigned_abs());
-        if mb == 0 {
-            // P H^T = 0: the reading says nothing about the state
-            return (Outcome { update: Update::Accepted, nis_q8, nu }, 0);
-        }
-        // |b| < 2^27: sb >= 3
-        let sb = normalize(mb).1 - 2;
+        let Scaling { y, ns, sb, ek, nis_q8 } = match scaling(nu, s, k, mb) {
+            Ok(sc) => sc,
+            Err(done) => return done,
+        };
         // t = beta / S 2^(30 - ns) (|t| < 2^29), rounded toward zero.
         let t = each(
             #[inline(always)]
             |i| over_s(b.get(i).copied().unwrap_or(0), sb, y),
         );
-        // K = b / S = t 2^(ns - sb - 30); in Q21: t 2^(ns - sb - 9). For a
-        // valid P, |K_i| <= sqrt(P_ii / S) < 2^8; the largest |t| is at
-        // least 2^27 - 3, so a shift above 2 means |K| >= 2^9: an invalid P.
-        let ek = ns as i32 - sb as i32 - 9;
-        if ek > 2 {
-            return (Outcome { nu, ..Outcome::not(Update::Outlier) }, 1);
-        }
         // |t| < 2^29, ek <= 2: K fits i32
         let gain = |i: usize| shift(t.get(i).copied().unwrap_or(0), ek);
         // State: K nu, Q21 * Q16 = Q37 mm. Position -> Coord (Q32): the
@@ -195,6 +176,53 @@ impl Filter {
         self.keep_in(bounds);
         (Outcome { update: Update::Accepted, nis_q8, nu }, repairs)
     }
+}
+
+/// A scalar correction's gate and scaling, shared by the whole filter
+/// ([`Filter::correct`]) and a secondary's pose block (`light`).
+pub(super) struct Scaling {
+    /// `1/S = y 2^(ns - 62)`.
+    pub y: u32,
+    pub ns: u32,
+    /// `b` normalised: `beta = b 2^sb` with `max |beta|` in `[2^29, 2^30)`.
+    pub sb: u32,
+    /// The gain's shift: `K = t 2^(ek - 21)` in Q21 for `t = beta / S 2^(30
+    /// - ns)`.
+    pub ek: i32,
+    /// `nu^2 / S`, Q8.
+    pub nis_q8: i32,
+}
+
+/// The gate and the scaling of a correction with innovation `nu` (Q16 mm),
+/// `S` and its shift `k` ([`innovation`]) and `mb`, the bits of `b = P H^T`
+/// or-ed together; `Err`: the outcome and repairs when nothing is applied
+/// (gated out, `P H^T = 0`, or a gain that only an invalid `P` gives).
+// tick bar (four hypotheses): inlined into both corrections
+#[inline(always)]
+pub(super) fn scaling(nu: i32, s: i32, k: u32, mb: u32) -> Result<Scaling, (Outcome, u32)> {
+    // Gate: nu^2 (Q32, <= 2^62; >> 4: Q28) against gate^2 S.
+    if mul_wide(nu, nu) >> 4 > gate_bound(s, k) {
+        return Err((Outcome { nu, ..Outcome::not(Update::Outlier) }, 0));
+    }
+    // 1/S = y 2^(ns - 62): S normalised to [2^31, 2^32), its reciprocal by
+    // two Newton steps (no division).
+    let (sn, ns) = normalize(s as u32); // s > 0
+    let y = reciprocal(sn);
+    let nis_q8 = normalised_square(nu, y, ns, k);
+    if mb == 0 {
+        // P H^T = 0: the reading says nothing about the state
+        return Err((Outcome { update: Update::Accepted, nis_q8, nu }, 0));
+    }
+    // |b| < 2^27: sb >= 3
+    let sb = normalize(mb).1 - 2;
+    // K = b / S = t 2^(ns - sb - 30); in Q21: t 2^(ns - sb - 9). For a valid
+    // P, |K_i| <= sqrt(P_ii / S) < 2^8; the largest |t| is at least 2^27 -
+    // 3, so a shift above 2 means |K| >= 2^9: an invalid P.
+    let ek = ns as i32 - sb as i32 - 9;
+    if ek > 2 {
+        return Err((Outcome { nu, ..Outcome::not(Update::Outlier) }, 1));
+    }
+    Ok(Scaling { y, ns, sb, ek, nis_q8 })
 }
 
 /// A gain `k` (Q21, per (L rad) mm) times `nu` (Q16 mm) as an angle:
