@@ -122,12 +122,10 @@ impl Pose {
         let t = self.trig();
         (t.sin, t.cos)
     }
+    /// The cache for the lever it holds.
     #[inline(always)]
     fn trig(&mut self) -> Trig {
-        if self.trig.at != self.theta {
-            self.trig = Trig::of(self.theta, self.trig.lever);
-        }
-        self.trig
+        self.trig_about(self.trig.lever)
     }
     /// The cache for a turn about `lever`.
     #[inline(always)]
@@ -149,11 +147,13 @@ pub fn advance(pose: &mut Pose, motion: Motion, dt: Dt) {
 
 /// Advances `pose` in place by `motion` held for `dt`, a turn swinging
 /// the reference point on `lever` (the module docs' `D`).
+// step bar: out of line as `advance` (their one body inlined into each)
 #[inline(never)]
 pub fn advance_about(pose: &mut Pose, motion: Motion, dt: Dt, lever: Lever) {
     step_about(pose, motion, dt, lever);
 }
 
+/// The body of [`advance`] and [`advance_about`].
 #[inline(always)]
 fn step_about(pose: &mut Pose, motion: Motion, dt: Dt, lever: Lever) {
     match motion {

@@ -69,7 +69,8 @@ pub(super) struct Pivot {
     /// added when a turn teaches it).
     pub var: i32,
     walked_us: u32,
-    /// For the predictions.
+    /// For the predictions: derived from `behind` and `var` when a turn
+    /// teaches them, not each tick (the tick bar).
     pub turning: Turning,
     turn: Option<Turn>,
     /// Turns learned from.
