@@ -57,6 +57,9 @@ struct Run {
     step_excess_mm: f64,
     /// Largest distance of a reported pose outside the box, mm.
     outside_mm: f64,
+    /// The lidar spot's learned share at the end (0 the cone's nearest
+    /// point, 1 the axis) and the batches it learned from.
+    spot: (f64, u16),
 }
 
 impl Run {
@@ -147,6 +150,8 @@ fn laps(realism: Realism, seed: u64, start: Start) -> Run {
     }
     run.rms_mm = (sum_sq / n.max(1) as f64).sqrt();
     run.collisions = robot.collisions();
+    let (share, batches) = robot.controller().estimator().lidar_spot();
+    run.spot = (f64::from(share) / f64::from(1 << 30), batches);
     run
 }
 
@@ -157,7 +162,7 @@ fn world(name: &str, realism: Realism, start: Start) -> (f64, f64, Vec<Run>) {
     for (seed, r) in (1..).zip(&runs) {
         println!(
             "{name} seed {seed:2}: {} rms {:6.1} mm, worst {:6.1} mm; {} collision ticks; standing still moved {:5.1} mm, \
-             row step beyond the wheels' {:6.1} mm, outside the box {:5.1} mm{}",
+             row step beyond the wheels' {:6.1} mm, outside the box {:5.1} mm; spot share {:.2} ({} batches){}",
             if r.located { "located;" } else { "NEVER LOCATED;" },
             r.rms_mm,
             r.worst_mm,
@@ -165,6 +170,8 @@ fn world(name: &str, realism: Realism, start: Start) -> (f64, f64, Vec<Run>) {
             r.standstill_mm,
             r.step_excess_mm,
             r.outside_mm,
+            r.spot.0,
+            r.spot.1,
             if r.invariants_hold() { "" } else { "  (invariants broken)" }
         );
     }
