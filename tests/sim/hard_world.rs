@@ -17,8 +17,10 @@
 //!
 //! Measured (lab world): see `lab_world_laps_keep_their_figures`; the hard
 //! world with the multi-hypothesis estimator: docs/simulator.md (median rms
-//! 28.0 mm, 1 run never located, 2 with collisions since the survey makes
-//! room to turn (19 before), the invariants kept by the 19 that located;
+//! 17.7 mm, the worst located run 26.3 mm, 1 run never located, 3 with
+//! collisions, the invariants kept by the 19 that located, with the learned
+//! lidar spot (each run prints its share); 28.0 mm and 2 with collisions
+//! before it; 19 with collisions before the survey made room to turn;
 //! 36.3 mm and 18 with collisions before the learned pivot; 125.7 mm, 2 never located and 16 before the
 //! lighter secondary hypotheses and the search's pivot and fourth view).
 //! The tracking alone (told the true start) and the hard effects one at a

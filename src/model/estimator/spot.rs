@@ -14,12 +14,15 @@
 //! point) and 1 (the axis): when `share` is off by `e`, a reading's
 //! innovation is about `e g` (and noise, and the pose's error). Batches of
 //! [`cfg::SPOT_BATCH`] counted readings give a least-squares sample of
-//! `e`, `sum(nu g) / sum(g^2)`, each reading's part clamped to what a
-//! share can explain (`|nu| <= g`: a spurious echo moves a sample by at
-//! most one reading's share), weighed against the learned share's
-//! variance by a scalar Kalman step. The oracle bar it closes in on: told
-//! the hard world's thin beam exactly, the tracking's median RMS there
-//! went from 31.2 mm to 10.7 (`tests/sim/hard_world.rs`, known start).
+//! `e`, `sum(nu g) / sum(g^2)`, each reading's innovation clamped at twice
+//! its spread and glancing readings (spread past
+//! `cfg::SPOT_MAX_SPREAD_MM`) left out (a spurious echo must not decide a
+//! batch), weighed against the learned share's variance by a scalar
+//! Kalman step on the next standing tick (the divisions' cost, see
+//! [`Spot::standing`]). The oracle bar it closes in on: told the hard
+//! world's thin beam exactly, the tracking's median RMS there went from
+//! 31.2 mm to 10.7 (`tests/sim/hard_world.rs`, known start); learned,
+//! 16.5.
 //!
 //! Why not a state of every filter: for the same reason as the pivot's
 //! (`pivot`), a column in every correction costs the tick more than its bar
