@@ -64,6 +64,43 @@ pub const PIVOT_MIN_TURN_DEG: f64 = 30.0;
 /// heading's share), mm: over the chord (1.4 for a quarter turn) the
 /// sample's sigma.
 pub const PIVOT_SAMPLE_SIGMA_MM: f64 = 6.0;
+/// Where in its spot a lidar's range comes from, as a share of the way from
+/// the cone's nearest wall point (0) to the beam's axis (1), learned
+/// (`model::estimator`'s spot.rs). It starts at the nearest point: the lab
+/// 2 README's "a beam 25 degrees wide that sees the nearest thing in its
+/// cone" (`tests/data/lab2/README.md`) ...
+pub const SPOT_SHARE_START: f64 = 0.0;
+/// ... with this one-sigma uncertainty: a thin beam (issue 29's hard
+/// world, a share of 1) is two sigmas away.
+pub const SPOT_SHARE_SIGMA: f64 = 0.5;
+/// Counted readings of the leader per sample of the share (learned at the
+/// next standing tick): 16 readings met off square (a spread of 10-40 mm
+/// each at the box's ranges) sample it within about 0.1-0.2. The hard
+/// world's power-up laps (`tests/sim/hard_world.rs`) measured 17.7 mm
+/// median RMS and 26.3 mm the worst located run with 16, 17.0 and 71.0
+/// with 32 (its runs spread by several mm from small changes).
+pub const SPOT_BATCH: u16 = 16;
+/// Readings whose spot spreads less than this along the wall's normal
+/// teach nothing about the share, mm: met nearly square on, the cone's
+/// nearest point and the axis's meet (the lidar's 2 mm sigma).
+pub const SPOT_MIN_SPREAD_MM: f64 = 2.0;
+/// ... nor do readings whose spot spreads more than this, mm: the batch is
+/// a least-squares fit, and one glancing reading at a long range (a
+/// spread of 100 mm and more, where the lab's world returns spurious
+/// echoes) outweighs the rest: one echo 130 mm long with a spread of 126
+/// took the share from 0 to 0.46 in the lab's world
+/// (`tests/control/untethered.rs`, seed 2). A reading's innovation counts
+/// as at most twice its spread (a share of 2).
+pub const SPOT_MAX_SPREAD_MM: f64 = 100.0;
+/// The least sigma of what a reading's innovation carries besides the
+/// share's error (the lidar's noise off square, `LIDAR_INCIDENCE_SIGMA_MM`,
+/// and the pose's), mm: a batch's own scatter about its line counts when
+/// larger; over the batch's `sqrt(sum g^2)` the sample's sigma.
+pub const SPOT_SAMPLE_SIGMA_MM: f64 = 15.0;
+/// The share's random walk per sample, one sigma: it never stops
+/// learning (another wall's surface, a battery that changes the
+/// sensor's timing).
+pub const SPOT_WALK_PER_SAMPLE: f64 = 0.02;
 /// Extra position noise always added, mm^2 per second: keeps the
 /// covariance a margin away from singular (a turn's noise is rank one)
 /// and from collapsing while the robot stands still; 0.7 mm after a

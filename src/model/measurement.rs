@@ -445,6 +445,15 @@ impl Beam {
         Length(mul_q30_unsat(z.saturating_add(self.setback).0, self.cone_normal)).saturating_sub(self.to_wall)
     }
 
+    /// How much longer than the cone's nearest point a reading `z` from the
+    /// beam's axis is, along the wall's normal: `(z + setback)(cos_cone -
+    /// cos_axis)`, at least 0 (0 met square on). Where in this spot the sensor's range comes
+    /// from is learned (`model::estimator`'s spot.rs).
+    pub fn spot_spread(&self, z: Length) -> Length {
+        // 0 <= cone_normal - normal <= 2^30: the product is below |z + setback|
+        Length(mul_q30_unsat(z.saturating_add(self.setback).0, self.cone_normal.saturating_sub(self.normal).max(0)))
+    }
+
     /// `-d(normal_miss)/d(theta)` for a reading `z`, signed for the north and
     /// east walls (the south and west walls' is its negation), mm per rad
     /// (Q16): `(z + setback)` times the cone's sine with the sign of the

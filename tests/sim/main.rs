@@ -10,4 +10,5 @@ mod pivot;
 mod realism;
 mod realistic_hour;
 mod simulate;
+mod spot;
 mod survey_room;

@@ -103,6 +103,16 @@ pub(super) const PIVOT_SETTLE_US: u32 = cfg::PIVOT_SETTLE_MS * 1000;
 /// The learned pivot's bounds, Q16 mm.
 pub(super) const PIVOT_MIN_Q16: i32 = to_i32(cfg::PIVOT_MIN_MM * 65536.0);
 pub(super) const PIVOT_MAX_Q16: i32 = to_i32(cfg::PIVOT_MAX_MM * 65536.0);
+/// The lidar spot's learned share (`spot`): its start and variance, Q30;
+/// its random walk per sample, Q30; a reading's least sample variance in
+/// 1/64 mm^2.
+pub(super) const SPOT_SHARE_START: i32 = to_i32(cfg::SPOT_SHARE_START * 1_073_741_824.0);
+pub(super) const SPOT_START_VAR: i32 = to_i32(cfg::SPOT_SHARE_SIGMA * cfg::SPOT_SHARE_SIGMA * 1_073_741_824.0);
+pub(super) const SPOT_WALK: i32 = to_i32(cfg::SPOT_WALK_PER_SAMPLE * cfg::SPOT_WALK_PER_SAMPLE * 1_073_741_824.0);
+pub(super) const SPOT_SAMPLE_VAR: i32 = to_i32(cfg::SPOT_SAMPLE_SIGMA_MM * cfg::SPOT_SAMPLE_SIGMA_MM * 64.0);
+/// The spreads that teach, 1/8 mm.
+pub(super) const SPOT_MIN_SPREAD_Q3: i32 = to_i32(cfg::SPOT_MIN_SPREAD_MM * 8.0);
+pub(super) const SPOT_MAX_SPREAD_Q3: i32 = to_i32(cfg::SPOT_MAX_SPREAD_MM * 8.0);
 /// A lidar's local re-search: the new hypothesis's position variance.
 pub(super) const P_RESEARCH: i32 = to_i32(cfg::RESEARCH_SIGMA_MM * cfg::RESEARCH_SIGMA_MM * Q12);
 /// The scales' bounds and 1, Q29.
@@ -167,6 +177,12 @@ const _: () = {
     assert!(P_RESEARCH > P_MIN && P_RESEARCH <= P_MAX);
     assert!(P0_PIVOT > 0 && P0_PIVOT <= P_MAX && (PIVOT_WALK as u64) * 65_535 < (1 << 32));
     assert!(PIVOT_SAMPLE_VAR > 0 && PIVOT_SAMPLE_VAR <= P_MAX);
+    // the share within [0, 1] and its variance at most 1 (Q30)
+    assert!(SPOT_SHARE_START >= 0 && SPOT_SHARE_START <= (1 << 30));
+    assert!(SPOT_START_VAR > 0 && SPOT_START_VAR <= (1 << 30) && SPOT_WALK >= 0 && SPOT_WALK < SPOT_START_VAR);
+    // a reading's g below 2^11 and nu within 2 g: nu g, g^2 and nu^2
+    // below 2^24, a batch's sums below 2^31
+    assert!(SPOT_SAMPLE_VAR > 0 && SPOT_MIN_SPREAD_Q3 > 0 && SPOT_MAX_SPREAD_Q3 < (1 << 11));
     // the turn's lever D + pivot within (0, 256) mm: (D + pivot) / L below
     // 1 in Q31 (`pivot::lever_over_l`), the pivot Q16 << 7 being Q31 / L
     // for L = 256 mm; a step's Jacobian entries (D + p)/L times the sine's

@@ -121,6 +121,7 @@ mod predict;
 mod report;
 mod research;
 mod seed;
+mod spot;
 mod tracker;
 mod update;
 
@@ -213,6 +214,8 @@ pub struct Estimator {
     evidence: EvidenceSet,
     /// Where turns in place pivot, learned (`pivot`).
     pivot: pivot::Pivot,
+    /// Where in the lidars' spot their ranges come from, learned (`spot`).
+    spot: spot::Spot,
     arena: Arena,
     /// Where the hypotheses' positions are kept (the arena and its margin).
     bounds: Bounds,
@@ -258,6 +261,7 @@ impl Estimator {
             clock_us: 0,
             evidence: EvidenceSet::FRESH,
             pivot: pivot::Pivot::START,
+            spot: spot::Spot::START,
             arena,
             bounds,
             inside: Bounds { low_mm: 0, high_x_mm: whole(arena.length_x), high_y_mm: whole(arena.width_y) },
@@ -343,6 +347,14 @@ impl Estimator {
     /// it was learned from (see `pivot`).
     pub fn pivot(&self) -> (Length, u32) {
         (Length(self.pivot.behind), self.pivot.samples)
+    }
+
+    /// Where in their spot the lidars' ranges come from, learned: the share
+    /// of the way from the cone's nearest wall point to the beam's axis
+    /// (Q30: 0 to 2^30), and the batches of readings it was learned from
+    /// (see `spot`).
+    pub fn lidar_spot(&self) -> (i32, u16) {
+        (self.spot.share, self.spot.samples)
     }
 
     /// How far behind the reference point turns in place pivot (`D` plus

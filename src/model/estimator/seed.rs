@@ -11,16 +11,19 @@ use crate::math::Length;
 use crate::model::state::Pose;
 
 impl Estimator {
-    /// Forgets everything but the counts, the learned pivot too (a typed
-    /// `pose` starts over): one hypothesis at `pose` with the config's
-    /// initial uncertainty, `Unknown`.
+    /// Forgets everything but the counts, the learned pivot and lidar spot
+    /// too (a typed `pose` starts over: the robot may be on another floor,
+    /// in another box): one hypothesis at `pose` with the config's initial
+    /// uncertainty, `Unknown`.
     pub fn reset(&mut self, pose: Pose) {
         self.pivot = super::pivot::Pivot::START;
+        self.spot = super::spot::Spot::START;
         self.lose_place(pose);
     }
 
     /// The place is lost (a localization failed), the robot is the same:
-    /// as [`Estimator::reset`] at `pose`, keeping the learned pivot.
+    /// as [`Estimator::reset`] at `pose`, keeping the learned pivot and
+    /// lidar spot.
     pub fn lose_place(&mut self, pose: Pose) {
         let mut f = Filter::new(pose);
         f.keep_in(&self.bounds);

@@ -79,6 +79,7 @@ impl Estimator {
             advance_about(&mut self.reported, scaled, dt, pivot.lever);
         }
         if motion == Motion::Stop {
+            self.spot.standing();
             if !self.standing {
                 self.slack = self.slack.min(CATCH_UP_STANDING_Q16);
                 self.standing = true;
@@ -123,11 +124,17 @@ impl Estimator {
     pub(super) fn lidar_all(&mut self, which: LidarId, distance: Length) -> Update {
         let counted = self.counts(Sensor::of(which));
         let (arena, bounds, best, other) = (self.arena, self.bounds, self.best, self.next_secondary());
+        let share = self.spot.share;
         let mut moved = (0i64, 0i64);
+        let mut spot = None;
         let mut through = |i: usize| -> Option<(Outcome, bool)> {
             let h = self.hyps.get_mut(i)?;
-            let Some(r) = h.lidar_reading(&arena, which, distance) else { return Some((Outcome::UNUSABLE, false)) };
+            let Some(r) = h.lidar_reading(&arena, which, distance, share) else {
+                return Some((Outcome::UNUSABLE, false));
+            };
             let (outcome, repairs) = if i == best {
+                // ... and its innovation the spot's share
+                spot = Some((r.nu, r.spread));
                 // the leader's correction: what it moved teaches the pivot
                 let (x, y) = (h.pose.x.0, h.pose.y.0);
                 let done = h.correct(r.row, r.nu, r.r, &bounds);
@@ -144,6 +151,10 @@ impl Estimator {
         let second = other.and_then(&mut through);
         let leader = self.best_id();
         self.pivot.moved(leader, moved.0, moved.1);
+        let learns = counted && self.tracking != Tracking::Unknown;
+        if let Some((nu, spread)) = spot.filter(|_| learns) {
+            self.spot.observe(nu, spread);
+        }
         self.weigh(counted, lead, other.zip(second));
         if self.disagreed(Sensor::of(which), lead.0.update, lead.1 && counted) {
             self.research_lidar(which, distance);

@@ -58,6 +58,9 @@ impl Outcome {
 pub(super) struct LidarReading {
     pub row: Row,
     pub nu: i32,
+    /// The reading's spot spread along the wall's normal, Q16 mm
+    /// ([`Beam::spot_spread`]).
+    pub spread: i32,
     pub r: i32,
     /// The wall's axis (X or Y) and the sign of its normal into the box.
     pub axis: usize,
@@ -69,11 +72,14 @@ pub(super) struct LidarReading {
 impl Filter {
     /// A lidar reading's row, innovation and noise for this hypothesis, or
     /// `None` when the geometry makes it useless (too oblique, near a corner).
+    /// The range is predicted `share` (Q30) of the way from the cone's
+    /// nearest wall point to the axis's (`spot`).
     pub(super) fn lidar_reading(
         &mut self,
         arena: &Arena,
         which: LidarId,
         distance: crate::math::Length,
+        share: i32,
     ) -> Option<LidarReading> {
         // refresh the pose's sin/cos cache in place (the beam reads it)
         self.pose.sin_cos();
@@ -83,7 +89,8 @@ impl Filter {
         }
         // |z| < 2^11 mm keeps H's heading entry below 2^19 (Q16)
         let z = crate::math::Length(distance.0.clamp(-(1 << 27), 1 << 27));
-        let nu = beam.normal_miss(z);
+        let spread = beam.spot_spread(z);
+        let nu = beam.normal_miss(z).saturating_sub(crate::math::Length(mul_q30_unsat(spread.0, share)));
         let axis = if beam.wall.is_x_wall() { X } else { Y };
         let north_or_east = matches!(beam.wall, Wall::North | Wall::East);
         let theta = (beam.heading_lever(z).0 >> 8).clamp(-THETA_MAX, THETA_MAX);
@@ -110,7 +117,7 @@ impl Filter {
             nu.saturating_add(beam.to_wall).saturating_sub(crate::math::Length(mul_q30(beam.setback.0, beam.normal)));
         let extent = if beam.wall.is_x_wall() { arena.length_x } else { arena.width_y };
         let possible = implied.0 >= 0 && implied <= extent;
-        Some(LidarReading { row, nu: nu.0, r, axis, toward_high: !north_or_east, possible })
+        Some(LidarReading { row, nu: nu.0, spread: spread.0, r, axis, toward_high: !north_or_east, possible })
     }
 
     /// The compass's row and innovation: it reads the heading plus the bias.
