@@ -138,26 +138,33 @@ pub fn estimator_rows() -> [Row; 9] {
     ]
 }
 
+/// An estimator with `n` hypotheses seeded 20 mm apart from `at` (30 mm
+/// sigma: each accepts a reading).
+fn seeded(at: Pose, n: usize) -> Estimator {
+    use paperbot::model::estimator::Seed;
+    let sigma = Length::from_mm(30);
+    let seeds: [Seed; HYPOTHESES] = core::array::from_fn(|i| {
+        let d = 20 * i as i32;
+        let q = Pose::new(at.x, paperbot::math::Coord(at.y.0 + (i64::from(d) << 32)), at.theta);
+        Seed { pose: q, sigma_x: sigma, sigma_y: sigma, weight: 1 }
+    });
+    let mut e = Estimator::new(at);
+    e.seed(seeds.get(..n).unwrap_or(&seeds));
+    e
+}
+
 /// An estimator's prediction (a turn: the longest) and one lidar correction
 /// (accepted by every hypothesis: the longest path), with `n` hypotheses
 /// seeded 20 mm apart around each pose (30 mm sigma: each accepts): the
 /// worst over the poses.
 pub fn predict_and_correct(n: usize) -> u32 {
-    use paperbot::model::estimator::Seed;
     let dt = Dt::from_micros_saturating(10_000);
     let arena = Arena::DEFAULT;
     POSES
         .iter()
         .map(|p| {
             let at = pose(p);
-            let sigma = Length::from_mm(30);
-            let seeds: [Seed; HYPOTHESES] = core::array::from_fn(|i| {
-                let d = 20 * i as i32;
-                let q = Pose::new(at.x, paperbot::math::Coord(at.y.0 + (i64::from(d) << 32)), at.theta);
-                Seed { pose: q, sigma_x: sigma, sigma_y: sigma, weight: 1 }
-            });
-            let mut e = Estimator::new(at);
-            e.seed(seeds.get(..n).unwrap_or(&seeds));
+            let mut e = seeded(at, n);
             let m = motion("Turn");
             e.predict(m, dt);
             let z = expected_lidar(&arena, &e.pose(), LidarId::Front).unwrap_or(Length::from_mm(100));
@@ -178,7 +185,6 @@ pub fn predict_and_correct(n: usize) -> u32 {
 /// worst over the poses whose beam meets no corner (a reading near one is
 /// not used), and how many those were.
 pub fn standing_learning_tick(n: usize) -> (u32, usize) {
-    use paperbot::model::estimator::Seed;
     let dt = Dt::from_micros_saturating(10_000);
     let arena = Arena::DEFAULT;
     let mut learned = 0;
@@ -187,14 +193,7 @@ pub fn standing_learning_tick(n: usize) -> (u32, usize) {
         .filter_map(|p| {
             let at = pose(p);
             let at = Pose::new(at.x, at.y, at.theta.wrapping_add(Angle::from_millidegrees(30_000)));
-            let sigma = Length::from_mm(30);
-            let seeds: [Seed; HYPOTHESES] = core::array::from_fn(|i| {
-                let d = 20 * i as i32;
-                let q = Pose::new(at.x, paperbot::math::Coord(at.y.0 + (i64::from(d) << 32)), at.theta);
-                Seed { pose: q, sigma_x: sigma, sigma_y: sigma, weight: 1 }
-            });
-            let mut e = Estimator::new(at);
-            e.seed(seeds.get(..n).unwrap_or(&seeds));
+            let mut e = seeded(at, n);
             // the batch: a reading after each 10.4 mm driven
             for i in 0..2 * paperbot::config::estimator::SPOT_BATCH {
                 let v = if i % 2 == 0 { 130 } else { -130 };

@@ -156,9 +156,17 @@ mod tests {
         assert!(f64::from(s.var) / f64::from(ONE) < sample_var * 1.01);
         // square on: no spread, no sample
         assert_eq!(batch(0.8, 0.5), Spot::START);
-        // an echo 200 mm long on a 10 mm spread counts as a share of 2
-        let echo = batch(20.0, 10.0);
-        assert_eq!(echo.share, batch(2.0, 10.0).share);
+        // among readings that fit the cone, one echo 200 mm long on a 10 mm
+        // spread counts as a share of 2: the batch's sample at most 2/16
+        let mut echo = Spot::START;
+        for i in 0..cfg::SPOT_BATCH {
+            let e = if i == 0 { 20.0 } else { 0.0 };
+            echo.observe(q16(e * 10.0), q16(10.0));
+        }
+        echo.standing();
+        let sample = 2.0 / f64::from(cfg::SPOT_BATCH);
+        assert!(f64::from(echo.share) / f64::from(ONE) <= sample, "{}", echo.share);
+        assert!(echo.share > 0);
         // a glancing reading (its spread past the most) teaches nothing
         assert_eq!(batch(0.8, cfg::SPOT_MAX_SPREAD_MM + 1.0), Spot::START);
         // short readings cannot take the share below the cone's nearest point

@@ -151,6 +151,8 @@ impl Estimator {
         let second = other.and_then(&mut through);
         let leader = self.best_id();
         self.pivot.moved(leader, moved.0, moved.1);
+        // the spot learns from new evidence on a placed estimate (ambiguous
+        // too: a share still wrong is what keeps a thin beam's estimate so)
         let learns = counted && self.tracking != Tracking::Unknown;
         if let Some((nu, spread)) = spot.filter(|_| learns) {
             self.spot.observe(nu, spread);
