@@ -108,8 +108,9 @@ pub const BLOCKED_TURN_DEG: i32 = 20;
 /// searched per loop tick: 200 took up to 315,565 lx106 instructions
 /// (39 % of the 10 ms tick at 80 MHz, one instruction a cycle), so 170
 /// take about 268,000, a third of the tick (half at 1.5 cycles), which
-/// leaves the tick's own work room (lx106/BENCHMARKS.md); a pass over
-/// the box takes about 90 ticks (0.9 s). Counted in scores, not grid
+/// leaves the tick's own work room (lx106/BENCHMARKS.md; a search at a
+/// learned lidar spot share 295,000, 37 %); a pass over the box takes
+/// about 90 ticks (0.9 s). Counted in scores, not grid
 /// columns: a column where many points explain the first view scores
 /// each of them once per pivot and later view.
 pub const SCORES_PER_TICK: u32 = 170;

@@ -168,6 +168,9 @@ pub struct Survey {
     positioned: bool,
     sweep: Sweep,
     room: RoomLog,
+    /// Where in its spot a lidar's range comes from, as the estimator has
+    /// learned it (Q30; [`Search::with_spot_share`]).
+    share: i32,
 }
 
 /// Where the turns have taken the body, in turns of
@@ -195,6 +198,13 @@ impl Default for Survey {
 }
 
 impl Survey {
+    /// The procedure's search reads each range `share` (Q30) of the way
+    /// into its spot: the estimator's learned share (a new procedure reads
+    /// the cone's nearest wall point, 0).
+    pub fn set_spot_share(&mut self, share: i32) {
+        self.share = share;
+    }
+
     /// A procedure about to take its first view.
     pub const fn new() -> Survey {
         Survey {
@@ -213,6 +223,7 @@ impl Survey {
             positioned: false,
             sweep: Sweep { at: 0, edges: [0, 0], edge_views: [0, 0], blocked: [false, false], steps: 1 },
             room: RoomLog { moved_mm: 0, reversed: 0, squeezed: 0, cut_short: false },
+            share: 0,
         }
     }
 
@@ -321,7 +332,7 @@ impl Survey {
     /// The search of the views so far.
     fn search(&mut self) -> Action {
         match Search::new(self.views()) {
-            Ok(search) => self.enter(Phase::Search(search)),
+            Ok(search) => self.enter(Phase::Search(search.with_spot_share(self.share))),
             Err(e) => self.searched(Err(e.into())),
         }
     }

@@ -42,6 +42,8 @@ impl<H: Hardware> Controller<H> {
     /// robot stands for its first view.
     pub(super) fn begin_locate(&mut self) {
         self.localizing = Localizing::new();
+        // the search reads the ranges as the estimator has learned to
+        self.localizing.survey.set_spot_share(self.estimator.lidar_spot().0);
         self.mode = Mode::Locate { drive: self.model.stop(), timer: Timer::new(Some(config::locate::TIME_LIMIT_MS)) };
     }
 

@@ -8,7 +8,9 @@
 //! box ([`cfg::GRID_MM`]) where the whole body fits (both lidars inside the
 //! walls) is tried as the reference point: the arena model
 //! ([`crate::model::measurement::Beam`], the lidars' cones included) says
-//! what each lidar should read there, and the point is consistent when
+//! what each lidar should read there (where in its spot the range comes
+//! from as the estimator has learned it, [`Search::with_spot_share`]: the
+//! cone's nearest wall point at power-up), and the point is consistent when
 //! every given reading is within [`cfg::TOLERANCE_MM`] of that (as
 //! `|normal_miss| <= tol cone_normal`: no division). A beam that would meet
 //! its wall past [`cfg::GLANCING_DEG`] at a point says nothing about that
@@ -170,7 +172,13 @@ pub const MAX_VIEWS: usize = 8;
 /// [`cfg::HEADING_STEP_DEG`] apart ever further from it, up to
 /// [`cfg::HEADING_STEPS`] each way (the compass may be disturbed).
 pub fn locate(arena: &Arena, views: &[Readings]) -> Result<Fix, LocateError> {
-    let mut search = Search::new(views)?;
+    locate_with_spot_share(arena, views, 0)
+}
+
+/// [`locate`] reading each range `share` of the way into its spot
+/// ([`Search::with_spot_share`]).
+pub fn locate_with_spot_share(arena: &Arena, views: &[Readings], share: i32) -> Result<Fix, LocateError> {
+    let mut search = Search::new(views)?.with_spot_share(share);
     // a step ends its pass at the latest
     for _ in 0..=Search::MAX_PASSES {
         if let Some(result) = search.step(arena, u32::MAX) {
@@ -201,6 +209,9 @@ pub struct Search {
     /// All the consistent points, and their clusters.
     sums: Sums,
     gather: Gather,
+    /// Where in its spot a lidar's range comes from (Q30; see
+    /// [`Search::with_spot_share`]).
+    share: i32,
 }
 
 impl Search {
@@ -229,7 +240,16 @@ impl Search {
             row: 0,
             sums: Sums::EMPTY,
             gather: Gather::EMPTY,
+            share: 0,
         })
+    }
+
+    /// The search reading each range `share` (Q30, 0 to 2^30) of the way
+    /// from its cone's nearest wall point to its beam's axis, as the
+    /// estimator has learned it (`Estimator::lidar_spot`); a new search
+    /// reads the nearest point (0).
+    pub fn with_spot_share(self, share: i32) -> Search {
+        Search { share: share.clamp(0, 1 << 30), ..self }
     }
 
     /// Searches on for up to `scores` more view scores (a view's two
@@ -307,7 +327,7 @@ impl Search {
         for (i, (slot, r)) in tried.iter_mut().zip(views).enumerate() {
             let heading = shifted(r);
             let tol = if i == 0 { TOLERANCE } else { TURNED_TOLERANCE };
-            *slot = Some(View::new(arena, &Readings { heading, ..*r }, shifted(first), tol));
+            *slot = Some(View::new(arena, &Readings { heading, ..*r }, shifted(first), tol, self.share));
         }
         tried
     }

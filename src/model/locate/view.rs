@@ -56,14 +56,17 @@ pub(super) struct View {
     pub offsets: [(i32, i32); PIVOTS],
     lidars: [(i32, i32); 2],
     tol: Length,
+    /// Where in its spot a range comes from (Q30, the estimator's learned
+    /// share: `model::estimator`'s spot.rs).
+    share: i32,
     pub box_mm: (i32, i32),
 }
 
 impl View {
     /// `r` (its heading the one tried), taken after turns in place from the
     /// first view's heading `first` (`r`'s own for the first view), with
-    /// the tolerance `tol`.
-    pub fn new(arena: &Arena, r: &Readings, first: Angle, tol: Length) -> View {
+    /// the tolerance `tol` and the lidar spot's share `share`.
+    pub fn new(arena: &Arena, r: &Readings, first: Angle, tol: Length, share: i32) -> View {
         let pose = Pose::from_mm(0, 0, r.heading);
         let (s, c) = { pose }.sin_cos();
         let (s0, c0) = Pose::from_mm(0, 0, first).sin_cos();
@@ -89,6 +92,7 @@ impl View {
             offsets,
             lidars: [lidar(LidarId::Front), lidar(LidarId::Right)],
             tol,
+            share,
             box_mm: (arena.length_x.0 >> 16, arena.width_y.0 >> 16),
         }
     }
@@ -125,7 +129,12 @@ impl View {
                 if !beam.square_enough(GLANCING_NORMAL) {
                     return Score::default();
                 }
-                let miss = beam.normal_miss(z).0.saturating_abs();
+                let mut miss = beam.normal_miss(z).0;
+                // (a learned share costs a slice about 9 %: skipped at 0)
+                if self.share != 0 {
+                    miss = miss.saturating_sub(mul_q30(beam.spot_spread(z).0, self.share));
+                }
+                let miss = miss.saturating_abs();
                 if miss <= mul_q30(self.tol.0, beam.cone_normal) {
                     Score { explained: 1, cost: miss.max(0) as u32, ..Score::default() }
                 } else {
