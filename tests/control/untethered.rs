@@ -81,6 +81,30 @@ fn a_square_of_gotos_ends_within_20_mm_of_each_corner() {
     }
 }
 
+/// A `goto` while the robot localizes waits for the fix it needs (the
+/// localization goes on; issue #29: only driving ends it); a second one
+/// replaces the first, which is answered; after the fix the robot goes.
+#[test]
+fn a_goto_while_locating_waits_for_the_fix_and_the_last_one_goes() {
+    let mut r = SimRobot::new(SimConfig { seed: 3, ..SimConfig::default() });
+    assert_eq!(r.take_output(), ["# ok locate"]);
+    r.send("rate 0");
+    ticks(&mut r, 1.0);
+    r.take_output();
+    r.send("goto 300 200");
+    assert_eq!(r.take_output(), ["# locating: it goes when located"]);
+    r.send("goto 450 300");
+    assert_eq!(
+        r.take_output(),
+        ["# err goto 300 200: replaced by a later command", "# locating: it goes when located"]
+    );
+    let lines = run_until(&mut r, &["# done", "# err", "# locate failed"], 60);
+    assert!(lines.first().is_some_and(|l| l.starts_with("# located ")), "{lines:?}");
+    assert_eq!(lines.get(1).map(String::as_str), Some("# ok goto 450 300"), "{lines:?}");
+    assert!(lines.last().is_some_and(|l| l.starts_with("# done at")), "{lines:?}");
+    assert!(miss(&r, 450.0, 300.0) <= 20.0, "{:?}", r.truth());
+}
+
 #[test]
 fn face_ends_within_3_degrees() {
     let mut r = robot(380.0, 250.0, 0.0, 7);

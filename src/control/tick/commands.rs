@@ -35,6 +35,17 @@ impl<H: Hardware> Controller<H> {
     pub fn handle(&mut self, cmd: Command, sink: &mut impl LineSink) {
         self.command_seen = true;
         self.command_received(sink);
+        // a goto or face while locating waits for the fix it needs: the
+        // localization goes on (only other commands end it), the newest
+        // target after it; one that waited already is answered
+        let needs_fix = matches!(cmd, Command::Goto { .. } | Command::Face { .. });
+        if needs_fix && matches!(self.mode, Mode::Locate { .. }) && self.missions.run.is_none() {
+            if let Some(old) = self.localizing.then.replace(cmd) {
+                self.say_refused(&old, "replaced by a later command", sink);
+            }
+            self.respond(&Response::Note("locating: it goes when located"), sink);
+            return;
+        }
         // a command ends a sweep or a localization (it runs instead)
         if !matches!(cmd, Command::Status | Command::Help | Command::Rate { .. } | Command::Settings) {
             match self.mode {

@@ -65,6 +65,12 @@ impl<H: Hardware> Controller<H> {
 
     /// `# err <command>: <why>`.
     pub(super) fn refuse(&mut self, cmd: &Command, why: &str, sink: &mut impl LineSink) {
+        self.say_refused(cmd, why, sink);
+        self.abort("stopped: a step was refused", sink);
+    }
+
+    /// `# err <cmd>: <why>`.
+    pub(super) fn say_refused(&mut self, cmd: &Command, why: &str, sink: &mut impl LineSink) {
         self.out.clear();
         let line = push_str(&mut self.out, "# err ")
             .and_then(|()| format_command(cmd, &mut self.out))
@@ -73,7 +79,6 @@ impl<H: Hardware> Controller<H> {
         if line.is_ok() {
             sink.write_line(&self.out);
         }
-        self.abort("stopped: a step was refused", sink);
     }
 
     /// One `goto`/`face` tick: plan from the estimate, or arrive.
