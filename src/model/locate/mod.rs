@@ -10,7 +10,9 @@
 //! ([`crate::model::measurement::Beam`], the lidars' cones included) says
 //! what each lidar should read there (where in its spot the range comes
 //! from as the estimator has learned it, [`Search::with_spot_share`]: the
-//! cone's nearest wall point at power-up), and the point is consistent when
+//! cone's nearest wall point at power-up, and the beam's axis as a guess
+//! when nothing fits that at the compass's heading: its fix is
+//! [`Fix::untrusted`]), and the point is consistent when
 //! every given reading is within [`cfg::TOLERANCE_MM`] of that (as
 //! `|normal_miss| <= tol cone_normal`: no division). A beam that would meet
 //! its wall past [`cfg::GLANCING_DEG`] at a point says nothing about that
@@ -105,9 +107,10 @@ pub struct Fix {
     /// common offset found says little about the last view's heading), or
     /// the fit leaves a reading unexplained and rests on fewer than
     /// [`cfg::MIN_POINTS_WITH_OUTLIER`] grid points (a sliver of the box
-    /// fits: the readings are not what the model expects). Reported as
-    /// uncertain; more views do not help (each brings its own compass
-    /// error).
+    /// fits: the readings are not what the model expects), or it fits only
+    /// reading the ranges as the beam's axis's, a guess where no spot share
+    /// was learned. Reported as uncertain; more views do not help (each
+    /// brings its own compass error).
     pub untrusted: bool,
     /// Heading steps ([`cfg::HEADING_STEP_DEG`]) between the fix's heading
     /// and the compass's: 0 when the compass's own heading fits.
@@ -212,12 +215,24 @@ pub struct Search {
     /// Where in its spot a lidar's range comes from (Q30; see
     /// [`Search::with_spot_share`]).
     share: i32,
+    /// The axis's share tried at the compass's heading when no share was
+    /// learned and nothing fits the nearest point: not yet, under way, done.
+    axis_guess: Guess,
+}
+
+/// The search's guess of the beam's axis (see [`Search::pass_done`]).
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+enum Guess {
+    NotYet,
+    UnderWay,
+    Done,
 }
 
 impl Search {
     /// Passes over the grid at most: one per heading tried and number of
-    /// readings left unexplained.
-    pub const MAX_PASSES: u32 = (1 + cfg::MAX_UNEXPLAINED) * (2 * cfg::HEADING_STEPS as u32 + 1);
+    /// readings left unexplained, and the axis's guess at the compass's
+    /// heading.
+    pub const MAX_PASSES: u32 = (1 + cfg::MAX_UNEXPLAINED) * (2 * cfg::HEADING_STEPS as u32 + 2);
 
     /// A search of `views` (the first [`MAX_VIEWS`]), not started.
     pub fn new(views: &[Readings]) -> Result<Search, LocateError> {
@@ -241,6 +256,7 @@ impl Search {
             sums: Sums::EMPTY,
             gather: Gather::EMPTY,
             share: 0,
+            axis_guess: Guess::NotYet,
         })
     }
 
@@ -249,7 +265,8 @@ impl Search {
     /// estimator has learned it (`Estimator::lidar_spot`); a new search
     /// reads the nearest point (0).
     pub fn with_spot_share(self, share: i32) -> Search {
-        Search { share: share.clamp(0, 1 << 30), ..self }
+        let axis_guess = if share == 0 { Guess::NotYet } else { Guess::Done };
+        Search { share: share.clamp(0, 1 << 30), axis_guess, ..self }
     }
 
     /// Searches on for up to `scores` more view scores (a view's two
@@ -295,6 +312,7 @@ impl Search {
             fix.compass_steps = u8::try_from(self.heading_try.div_ceil(2)).unwrap_or(u8::MAX);
             fix.unexplained = u8::try_from(self.allowed).unwrap_or(u8::MAX);
             fix.untrusted = fix.compass_steps > 0
+                || self.axis_guess == Guess::UnderWay
                 || self.allowed > 1
                 || (self.allowed > 0 && fix.points < cfg::MIN_POINTS_WITH_OUTLIER);
             return Some(Ok(fix));
@@ -309,6 +327,17 @@ impl Search {
             return None;
         }
         self.allowed = 0;
+        // nothing fits the compass's heading reading the cone's nearest
+        // point, and no share was learned: the beam's axis, a guess (its
+        // fix untrusted), before the other headings
+        match self.axis_guess {
+            Guess::NotYet if self.heading_try == 0 => {
+                (self.axis_guess, self.share) = (Guess::UnderWay, 1 << 30);
+                return None;
+            }
+            Guess::UnderWay => (self.axis_guess, self.share) = (Guess::Done, 0),
+            _ => {}
+        }
         self.heading_try = self.heading_try.saturating_add(1);
         None
     }

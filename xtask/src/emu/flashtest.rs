@@ -163,7 +163,7 @@ pub(super) fn run(r: &mut Report, board: &Board, work: &Path, image: &Path, e: &
 }
 
 /// A mission's log kept in flash at its end, then sent by `dump` after a
-/// power-cycle: a full log (100 Hz for 2.5 s: the ring's 200 rows, 50
+/// power-cycle: a full log (100 Hz for 2.5 s: the ring's 198 rows, 52
 /// dropped), so the pause reported is the longest a keep takes.
 pub(super) fn kept_log(r: &mut Report, board: &Board, work: &Path, image: &Path, e: &Expect) -> Result<(), String> {
     let flash = work.join("flash-log.bin");
@@ -190,7 +190,7 @@ pub(super) fn kept_log(r: &mut Report, board: &Board, work: &Path, image: &Path,
     // the rows between the summary and its end (telemetry runs before)
     let dumped = uart.lines().map(|l| l.trim_end_matches('\r')).skip_while(|l| !l.starts_with("# log ")).skip(1);
     let sent = dumped.take_while(|l| *l != "# log end").filter(|l| l.starts_with(|c: char| c.is_ascii_digit())).count();
-    // 2.5 s at 100 Hz: about 250 rows pushed, the newest 200 kept
+    // 2.5 s at 100 Hz: about 250 rows pushed, the newest 198 kept
     let dropped = |l: &str| -> Option<u32> {
         let rest = l.strip_prefix(&format!("# log {} rows at 100 Hz, ", rows?))?;
         rest.strip_suffix(" dropped (oldest first), kept in flash, log 1")?.parse().ok()
