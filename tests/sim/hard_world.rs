@@ -21,10 +21,12 @@
 //!
 //! Measured (lab world): see `lab_world_laps_keep_their_figures`; the hard
 //! world with the multi-hypothesis estimator: docs/simulator.md (median rms
-//! 14.9 mm, the worst located run 25.1 mm, 1 run never located, 1 with
-//! collisions (6 ticks), the invariants kept by the 19 that located, with
-//! the learned lidar spot (each run prints its share) that the search reads
-//! too and a `goto` waiting for a localization under way; 17.7 mm and 3
+//! 15.4 mm, the worst run 29.1 mm, every run located, 1 with collisions
+//! (6 ticks), the invariants kept, with the learned lidar spot (each run
+//! prints its share) that the search reads too (the axis guessed at
+//! power-up when nothing fits the nearest point) and a `goto` waiting for
+//! a localization under way; 14.9 mm with 1 run never located before the
+//! axis's guess; 17.7 mm and 3
 //! with collisions before those two; 28.0 mm and 2 with collisions before
 //! the learned spot; 19 with collisions before the survey made room to turn;
 //! 36.3 mm and 18 with collisions before the learned pivot; 125.7 mm, 2 never located and 16 before the
