@@ -13,7 +13,7 @@
 //! `control::goto`, the heading's unit vector in Q30.
 
 use crate::config;
-use crate::math::isqrt64;
+use crate::math::{isqrt64, Length};
 use crate::model::measurement::Arena;
 
 /// A heading within 30 degrees of a wall runs along it: the sine of 30
@@ -34,11 +34,17 @@ pub enum Room {
     Cramped,
 }
 
+/// The body's length from the reference point back to the skid (its back
+/// end).
+pub fn reference_to_skid() -> Length {
+    config::geometry::ROTATION_TO_REFERENCE.saturating_add(config::geometry::SKID_BEHIND_AXLE)
+}
+
 /// The body's swept radius about a centre `centre_q4` behind the
 /// reference point (1/16 mm): its farthest corner, front (the reference
 /// point's side) or back (the skid's).
 pub fn swept_radius(centre_q4: i64) -> i64 {
-    let back = q4(config::geometry::ROTATION_TO_REFERENCE.0).saturating_add(q4(config::geometry::SKID_BEHIND_AXLE.0));
+    let back = q4(reference_to_skid().0);
     let half_width = q4(config::geometry::BODY_HALF_WIDTH.0);
     let along = centre_q4.saturating_abs().max(back.saturating_sub(centre_q4).saturating_abs());
     let sq = along.saturating_mul(along).saturating_add(half_width.saturating_mul(half_width));
@@ -90,7 +96,7 @@ pub fn room(cx: i64, cy: i64, ux: i64, uy: i64, radius: i64, arena: &Arena) -> R
 pub fn may_drive(px: i64, py: i64, ux: i64, uy: i64, forward: bool, arena: &Arena) -> bool {
     let margin = i64::from(config::goto::TURN_WALL_MARGIN_MM) << 4;
     let half_width = q4(config::geometry::BODY_HALF_WIDTH.0);
-    let back = q4(config::geometry::ROTATION_TO_REFERENCE.0).saturating_add(q4(config::geometry::SKID_BEHIND_AXLE.0));
+    let back = q4(reference_to_skid().0);
     // the leading end's middle, and half its width along the right (-uy, ux)
     let along = if forward { 0 } else { back.saturating_neg() };
     let (mx, my) =

@@ -30,7 +30,7 @@
 //! wall: the survey does not stop for it.
 
 use crate::config;
-use crate::control::goto::room::swept_radius;
+use crate::control::goto::room::{reference_to_skid, swept_radius};
 use crate::math::Length;
 use crate::model::locate::Readings;
 
@@ -45,8 +45,7 @@ pub fn reach_mm() -> i32 {
 /// From the turning centre back to the body's back end (the skid), mm
 /// (0 when the centre is at the skid).
 fn centre_to_back_mm() -> i32 {
-    let back = config::geometry::ROTATION_TO_REFERENCE.saturating_add(config::geometry::SKID_BEHIND_AXLE);
-    back.saturating_sub(config::locate::TURN_CENTRE_BEHIND_REFERENCE).to_mm().max(0)
+    reference_to_skid().saturating_sub(config::locate::TURN_CENTRE_BEHIND_REFERENCE).to_mm().max(0)
 }
 
 /// How sure of the wall ahead a turn must be.
