@@ -123,11 +123,13 @@ impl Pose {
         (t.sin, t.cos)
     }
     /// The cache for the lever it holds.
+    // tick bar: the cache's check inlined into the beam and the step
     #[inline(always)]
     fn trig(&mut self) -> Trig {
         self.trig_about(self.trig.lever)
     }
     /// The cache for a turn about `lever`.
+    // tick bar: as `trig`
     #[inline(always)]
     fn trig_about(&mut self, lever: Lever) -> Trig {
         if self.trig.at != self.theta || self.trig.lever != lever {

@@ -87,6 +87,7 @@ impl Spot {
     /// The servos stand: a full batch is learned from now, when the tick's
     /// prediction is cheapest (its two divisions, about 1,500 lx106
     /// instructions, would take a moving tick past its bar).
+    // tick bar: a compare inlined into every prediction
     #[inline(always)]
     pub fn standing(&mut self) {
         if self.readings >= cfg::SPOT_BATCH {
@@ -100,6 +101,7 @@ impl Spot {
     /// share's line fits badly, a pose's error or an echo, teaches less),
     /// weighed by a scalar Kalman step after the share's random walk; a
     /// new batch starts.
+    // tick bar: once a batch, kept out of the standing tick's line
     #[cold]
     #[inline(never)]
     fn learn(&mut self) {
