@@ -77,6 +77,12 @@ pub struct Nav {
     /// It started from a localization's fix (an estimate that grows too
     /// uncertain on the way then stops it, instead of localizing again).
     pub after_fix: bool,
+    /// Ticks it has stood waiting for an estimate too uncertain to steer
+    /// by to settle ([`config::goto::SETTLE_MS`]); 0 while it steers.
+    pub settling: u16,
+    /// `# ok` said: false while a `goto` that found the estimate too
+    /// uncertain at the start waits for it to settle.
+    pub answered: bool,
 }
 
 /// What to do this tick.
@@ -134,7 +140,7 @@ pub fn check_target(target: Target, arena: &Arena) -> Result<(), Refusal> {
 
 impl Nav {
     pub fn new(target: Target) -> Nav {
-        Nav { target, leg: Leg::Start, obstacle_since: None, after_fix: false }
+        Nav { target, leg: Leg::Start, obstacle_since: None, after_fix: false, settling: 0, answered: true }
     }
 
     /// Plans this tick from the estimated `pose`, for turns pivoting

@@ -188,6 +188,9 @@ pub struct SimRobot {
     /// What the run drew once: the hard world's robot, the compass's
     /// pattern over the floor.
     drawn: Drawn,
+    /// A hand held this far in front of the front lidar, mm: it reads the
+    /// nearer of the hand and the wall (`None`: no hand).
+    pub hand_mm: Option<f64>,
 }
 
 impl SimRobot {
@@ -246,6 +249,7 @@ impl SimRobot {
             collisions: 0,
             trial: Trial::NONE,
             drawn,
+            hand_mm: None,
         }
     }
 
@@ -280,6 +284,11 @@ impl SimRobot {
         let now_ns = clock.now_ns().max(self.next_tick_ns);
         clock.advance_ns(now_ns - clock.now_ns());
         set_truth(&self.sensors, &self.cfg, &self.truth, &mut self.rng, &self.drawn);
+        if let Some(hand) = self.hand_mm.and_then(|mm| config::lidar::FRONT.reading_for(Length::from_mm_f64(mm))) {
+            let mut front = self.sensors.front.borrow_mut();
+            let wall = front.distance_mm();
+            front.set_distance_mm(wall.min(hand));
+        }
         // the loop's wrapping microsecond counter
         self.ctl.tick((now_ns / 1_000) as u32, &mut self.out);
         self.next_tick_ns = now_ns + u64::from(TICK_US) * 1_000;

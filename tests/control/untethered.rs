@@ -105,6 +105,61 @@ fn a_goto_while_locating_waits_for_the_fix_and_the_last_one_goes() {
     assert!(miss(&r, 450.0, 300.0) <= 20.0, "{:?}", r.truth());
 }
 
+/// A hand held in front of a standing robot's front
+/// lidar: the readings disagree with the estimate, a re-search seeds a
+/// hypothesis where they put it, and hypotheses compete. A `goto` sent
+/// then stands while the readings weigh them (at most
+/// `config::goto::SETTLE_MS`), answers `# ok` and goes, with no
+/// localization.
+#[test]
+fn a_goto_while_hypotheses_compete_waits_for_them_to_settle() {
+    let mut r = SimRobot::new(SimConfig { seed: 3, ..SimConfig::default() });
+    r.send("rate 0");
+    let lines = run_until(&mut r, &["# located", "# locate failed"], 60);
+    assert!(lines.last().is_some_and(|l| l.starts_with("# located ")), "{lines:?}");
+    // square to the walls: both lidars read them
+    r.send("face 0");
+    let lines = run_until(&mut r, &["# done", "# err"], 10);
+    assert!(lines.last().is_some_and(|l| l.starts_with("# done at")), "{lines:?}");
+    ticks(&mut r, 1.0);
+    assert!(!r.controller().estimator().contested());
+    r.hand_mm = Some(150.0);
+    let contested = (0..2 * TICKS_PER_S).any(|_| {
+        r.tick();
+        r.controller().estimator().contested()
+    });
+    assert!(contested, "the hand went unnoticed: {:?} {:?}", r.take_output(), r.controller().estimator().stats());
+    r.take_output();
+    r.send("goto 450 300");
+    r.hand_mm = None;
+    let settle_ticks = u64::from(config::goto::SETTLE_MS) * TICKS_PER_S / 1000;
+    let mut lines = r.take_output();
+    let mut waited = 0;
+    while lines.is_empty() && waited <= settle_ticks {
+        r.tick();
+        lines.extend(r.take_output());
+        waited += 1;
+    }
+    assert_eq!(lines, ["# ok goto 450 300"], "after {waited} ticks");
+    assert!(waited > 1, "it did not wait");
+    let lines = run_until(&mut r, &["# done", "# err"], 20);
+    assert!(lines.last().is_some_and(|l| l.starts_with("# done at")), "{lines:?}");
+    assert!(miss(&r, 450.0, 300.0) <= 20.0, "{:?}", r.truth());
+}
+
+/// A heading too uncertain to steer by does not settle while the robot
+/// stands (the compass's bias hides it): a `goto` finds the pose at once.
+#[test]
+fn a_goto_on_an_uncertain_heading_locates_at_once() {
+    let mut r = robot(380.0, 250.0, 0.0, 3);
+    ticks(&mut r, 2.0);
+    let sigma = r.controller().estimator().sigma();
+    assert!(sigma.theta.to_radians_f64().to_degrees() > f64::from(config::goto::MAX_SIGMA_MDEG) / 1000.0);
+    assert!(sigma.x.to_mm_f64().max(sigma.y.to_mm_f64()) < f64::from(config::goto::MAX_SIGMA_MM));
+    r.send("goto 450 300");
+    assert_eq!(r.take_output(), ["# estimate too uncertain to steer by: locating first"]);
+}
+
 #[test]
 fn face_ends_within_3_degrees() {
     let mut r = robot(380.0, 250.0, 0.0, 7);

@@ -8,13 +8,18 @@ use crate::control::goto::{check_target, position_steerable, Nav, NavStep, Refus
 use crate::control::protocol::number::{push_fixed_parts, push_i32, push_str};
 use crate::control::protocol::{format_command, Command, Response};
 use crate::math::{Angle, Length};
+use crate::model::estimator::Tracking;
 use crate::model::Motion;
+
+/// [`config::goto::SETTLE_MS`] in loop ticks.
+const SETTLE_TICKS: u32 = config::goto::SETTLE_MS * config::timing::LOOP_HZ / 1000;
 
 impl<H: Hardware> Controller<H> {
     /// Starts a `goto`, `face` or `wait` (from a command or a mission
-    /// step); a refused one answers why and aborts a running mission. An
-    /// estimate too uncertain to steer by is found first (`locate`), then
-    /// the command starts (`may_locate` false: it is refused).
+    /// step); a refused one answers why and aborts a running mission. On an
+    /// estimate too uncertain to steer by a `goto` or `face` first stands
+    /// while standing may settle it (`unsettled`), else it finds the pose
+    /// (`locate`), then starts (`may_locate` false: it is refused).
     pub(super) fn begin(&mut self, cmd: &Command, may_locate: bool, sink: &mut impl LineSink) {
         let target = match *cmd {
             Command::Goto { x_mm, y_mm } => Target::Point { x_mm, y_mm },
@@ -25,12 +30,12 @@ impl<H: Hardware> Controller<H> {
             }
             _ => return,
         };
-        match check_target(target, &self.estimator.arena()).and_then(|()| self.certain_enough(1)) {
-            Ok(()) => {}
+        let answered = match check_target(target, &self.estimator.arena()).and_then(|()| self.certain_enough(1)) {
+            Ok(()) => true,
+            Err(Refusal::Uncertain) if self.settles_standing(1) => false,
             Err(Refusal::Uncertain) if may_locate => {
                 self.respond(&Response::Note("estimate too uncertain to steer by: locating first"), sink);
-                self.begin_locate();
-                self.localizing.then = Some(*cmd);
+                self.locate_then(*cmd);
                 return;
             }
             Err(why) => {
@@ -38,11 +43,19 @@ impl<H: Hardware> Controller<H> {
                 self.refuse(cmd, why.text(), sink);
                 return;
             }
+        };
+        if answered {
+            self.respond(&Response::Ok(cmd), sink);
         }
-        self.respond(&Response::Ok(cmd), sink);
         let timer = Timer::new(Some(config::goto::TIME_LIMIT_MS));
-        let nav = Nav { after_fix: !may_locate, ..Nav::new(target) };
+        let nav = Nav { after_fix: !may_locate, answered, ..Nav::new(target) };
         self.mode = Mode::Goto { nav, drive: self.model.stop(), timer };
+    }
+
+    /// Localizes, then begins `cmd`.
+    fn locate_then(&mut self, cmd: Command) {
+        self.begin_locate();
+        self.localizing.then = Some(cmd);
     }
 
     /// The estimate is good enough to steer by: not ambiguous, and within
@@ -61,6 +74,19 @@ impl<H: Hardware> Controller<H> {
         } else {
             Ok(())
         }
+    }
+
+    /// What is too uncertain to steer by may settle while the robot
+    /// stands: hypotheses that compete (the sensors weigh them) or a
+    /// position too uncertain (the lidars shrink it), not a heading (the
+    /// compass's bias hides it while the robot stands) nor an unknown pose.
+    fn settles_standing(&self, slack: i32) -> bool {
+        let sigma = self.estimator.sigma();
+        let heading = Angle::from_millidegrees(config::goto::MAX_SIGMA_MDEG.saturating_mul(slack));
+        self.estimator.contested()
+            || (self.estimator.tracking() != Tracking::Unknown
+                && !position_steerable(sigma.x, sigma.y, slack)
+                && sigma.theta.0 <= heading.0)
     }
 
     /// `# err <command>: <why>`.
@@ -84,19 +110,14 @@ impl<H: Hardware> Controller<H> {
     /// One `goto`/`face` tick: plan from the estimate, or arrive.
     pub(super) fn navigate(&mut self, now: Stamp, sink: &mut impl LineSink) {
         let Mode::Goto { mut nav, timer, .. } = self.mode else { return };
-        if self.certain_enough(2).is_err() {
-            if nav.after_fix {
-                return self.halt("estimate too uncertain on the way", now, sink);
-            }
-            // find the pose, then go on to the same target
-            let cmd = match nav.target {
-                Target::Point { x_mm, y_mm } => Command::Goto { x_mm, y_mm },
-                Target::Heading(heading) => Command::Face { heading },
-            };
-            self.respond(&Response::Note("estimate too uncertain on the way: locating first"), sink);
-            self.begin_locate();
-            self.localizing.then = Some(cmd);
-            return;
+        if self.certain_enough(if nav.answered { 2 } else { 1 }).is_err() {
+            return self.unsettled(nav, timer, now, sink);
+        }
+        nav.settling = 0;
+        if !nav.answered {
+            nav.answered = true;
+            let cmd = command_of(nav.target);
+            self.respond(&Response::Ok(&cmd), sink);
         }
         // turns pivot where the estimator learned, or config says until then
         let centre = self.estimator.learned_turn_centre().unwrap_or(config::goto::TURN_CENTRE_BEHIND_REFERENCE);
@@ -134,6 +155,36 @@ impl<H: Hardware> Controller<H> {
         }
     }
 
+    /// A `goto` or `face` on an estimate too uncertain to steer by: while
+    /// standing may settle it (`settles_standing`) it stands, for at most
+    /// [`config::goto::SETTLE_MS`]; then (or at once) it finds the pose and
+    /// goes on to the same target. One that started from a fix is stopped
+    /// (refused if it had not started) instead of localizing again.
+    fn unsettled(&mut self, mut nav: Nav, timer: Timer, now: Stamp, sink: &mut impl LineSink) {
+        if u32::from(nav.settling) < SETTLE_TICKS && self.settles_standing(if nav.answered { 2 } else { 1 }) {
+            nav.settling = nav.settling.saturating_add(1);
+            self.mode = Mode::Goto { nav, drive: self.model.stop(), timer };
+            return;
+        }
+        let cmd = command_of(nav.target);
+        match (nav.after_fix, nav.answered) {
+            (true, true) => self.halt("estimate too uncertain on the way", now, sink),
+            (true, false) => {
+                self.mode = Mode::Idle;
+                self.refuse(&cmd, Refusal::Uncertain.text(), sink);
+            }
+            (false, answered) => {
+                let note = if answered {
+                    "estimate too uncertain on the way: locating first"
+                } else {
+                    "estimate too uncertain to steer by: locating first"
+                };
+                self.respond(&Response::Note(note), sink);
+                self.locate_then(cmd);
+            }
+        }
+    }
+
     /// The front lidar's distance if it read a target lately (too close
     /// to measure is 0).
     pub(super) fn front_distance(&self, now: Stamp) -> Option<Length> {
@@ -167,5 +218,13 @@ impl<H: Hardware> Controller<H> {
             sink.write_line(&self.out);
         }
         self.abort("stopped: a step failed", sink);
+    }
+}
+
+/// The command that set `target`.
+fn command_of(target: Target) -> Command {
+    match target {
+        Target::Point { x_mm, y_mm } => Command::Goto { x_mm, y_mm },
+        Target::Heading(heading) => Command::Face { heading },
     }
 }

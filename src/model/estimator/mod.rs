@@ -281,6 +281,15 @@ impl Estimator {
         self.tracking
     }
 
+    /// Ambiguous because hypotheses compete (none leads by
+    /// [`cfg::DOMINATE_COST`]): the sensors' next readings weigh them,
+    /// standing too (once each [`cfg::EVIDENCE_PERIOD_S`]). Not while the
+    /// reported pose only lags a dominant hypothesis, which a standing
+    /// robot's never closes.
+    pub fn contested(&self) -> bool {
+        self.tracking == Tracking::Ambiguous && !self.dominant
+    }
+
     pub fn arena(&self) -> Arena {
         self.arena
     }
