@@ -105,10 +105,10 @@ fn a_goto_while_locating_waits_for_the_fix_and_the_last_one_goes() {
     assert!(miss(&r, 450.0, 300.0) <= 20.0, "{:?}", r.truth());
 }
 
-/// A hand held in front of a standing robot's front
-/// lidar: the readings disagree with the estimate, a re-search seeds a
-/// hypothesis where they put it, and hypotheses compete. A `goto` sent
-/// then stands while the readings weigh them (at most
+/// A hand held 150 mm in front of a standing robot's front lidar: the
+/// readings disagree with the estimate, a re-search seeds a hypothesis
+/// where they put it, and hypotheses compete. A `goto` sent then, the hand
+/// gone, stands while the readings weigh them (at most
 /// `config::goto::SETTLE_MS`), answers `# ok` and goes, with no
 /// localization.
 #[test]
