@@ -281,3 +281,28 @@ fn integer_square_roots_are_floors() {
         }
     }
 }
+
+/// `contested` says hypotheses compete (what a standing robot's readings
+/// can settle: a `goto` waits for it, `config::goto::SETTLE_MS`), not that
+/// the reported pose lags a hypothesis that leads (which standing never
+/// closes): two equal seeds 200 mm apart compete; standing, the readings
+/// make the truth's lead, and the reported pose, held at the other seed,
+/// only lags: still `Ambiguous`, no longer contested. One seed is neither.
+#[test]
+fn contested_is_hypotheses_competing_not_the_reported_pose_lagging() {
+    let truth = Pose::from_mm(500, 250, deg(0.0));
+    let other = Pose::from_mm(300, 250, deg(0.0));
+    let mut est = Estimator::new(truth);
+    est.seed(&[seed_at(other, 1), seed_at(truth, 1)]);
+    assert!(est.contested());
+    for k in 0..300 {
+        tick(&mut est, &truth, Motion::Stop, k);
+    }
+    assert!(distance(&est.best_pose(), &truth) < 3.0, "the truth leads: {:?}", est.best_pose());
+    assert!(distance(&est.pose(), &truth) > 50.0, "the reported pose lags: {:?}", est.pose());
+    assert_eq!(est.tracking(), Tracking::Ambiguous);
+    assert!(!est.contested());
+    est.seed(&[seed_at(truth, 1)]);
+    assert_eq!(est.tracking(), Tracking::Located);
+    assert!(!est.contested());
+}
