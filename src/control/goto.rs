@@ -125,6 +125,13 @@ pub fn position_steerable(x: crate::math::Length, y: crate::math::Length, slack:
     x <= limit && y <= limit
 }
 
+/// A one-sigma heading uncertainty small enough to steer by: `slack` times
+/// [`config::goto::MAX_SIGMA_MDEG`] (as [`position_steerable`]).
+pub fn heading_steerable(theta: Angle, slack: i32) -> bool {
+    // a one-sigma heading is small and positive: compare the LSBs
+    theta.0 <= Angle::from_millidegrees(config::goto::MAX_SIGMA_MDEG.saturating_mul(slack)).0
+}
+
 /// Checks a target against the arena's walls (a heading always passes).
 pub fn check_target(target: Target, arena: &Arena) -> Result<(), Refusal> {
     let Target::Point { x_mm, y_mm } = target else { return Ok(()) };
@@ -141,6 +148,16 @@ pub fn check_target(target: Target, arena: &Arena) -> Result<(), Refusal> {
 impl Nav {
     pub fn new(target: Target) -> Nav {
         Nav { target, leg: Leg::Start, obstacle_since: None, after_fix: false, settling: 0, answered: true }
+    }
+
+    /// The slack on the steering limits ([`position_steerable`]): 1 to
+    /// start, 2 once under way.
+    pub fn slack(&self) -> i32 {
+        if self.answered {
+            2
+        } else {
+            1
+        }
     }
 
     /// Plans this tick from the estimated `pose`, for turns pivoting

@@ -24,6 +24,16 @@ fn seed_at(pose: Pose, weight: u32) -> Seed {
     Seed { pose, sigma_x: s, sigma_y: s, weight }
 }
 
+/// The truth at (500, 250) and another place 200 mm away, seeded with
+/// equal weights, the other first: the estimator and the two poses.
+fn two_equal_seeds() -> (Estimator, Pose, Pose) {
+    let truth = Pose::from_mm(500, 250, deg(0.0));
+    let other = Pose::from_mm(300, 250, deg(0.0));
+    let mut est = Estimator::new(truth);
+    est.seed(&[seed_at(other, 1), seed_at(truth, 1)]);
+    (est, truth, other)
+}
+
 /// One tick of exact readings of `truth` (both lidars every third tick, the
 /// compass every tick), after predicting `motion`.
 fn tick(est: &mut Estimator, truth: &Pose, motion: Motion, k: u32) {
@@ -50,10 +60,7 @@ fn distance(a: &Pose, b: &Pose) -> f64 {
 /// it has caught up.
 #[test]
 fn two_equal_seeds_are_ambiguous_until_the_robot_moves() {
-    let truth0 = Pose::from_mm(500, 250, deg(0.0));
-    let other = Pose::from_mm(300, 250, deg(0.0));
-    let mut est = Estimator::new(truth0);
-    est.seed(&[seed_at(other, 1), seed_at(truth0, 1)]);
+    let (mut est, truth0, other) = two_equal_seeds();
     assert_eq!(est.tracking(), Tracking::Ambiguous);
     assert_eq!(est.hypotheses().count(), 2);
     let p = est.pose();
@@ -290,10 +297,7 @@ fn integer_square_roots_are_floors() {
 /// only lags: still `Ambiguous`, no longer contested. One seed is neither.
 #[test]
 fn contested_is_hypotheses_competing_not_the_reported_pose_lagging() {
-    let truth = Pose::from_mm(500, 250, deg(0.0));
-    let other = Pose::from_mm(300, 250, deg(0.0));
-    let mut est = Estimator::new(truth);
-    est.seed(&[seed_at(other, 1), seed_at(truth, 1)]);
+    let (mut est, truth, _) = two_equal_seeds();
     assert!(est.contested());
     for k in 0..300 {
         tick(&mut est, &truth, Motion::Stop, k);

@@ -4,10 +4,10 @@
 use super::clock::{ms_to_us, Stamp, Timer};
 use super::{Controller, Hardware, LineSink, Mode};
 use crate::config;
-use crate::control::goto::{check_target, position_steerable, Nav, NavStep, Refusal, Target};
+use crate::control::goto::{check_target, heading_steerable, position_steerable, Nav, NavStep, Refusal, Target};
 use crate::control::protocol::number::{push_fixed_parts, push_i32, push_str};
 use crate::control::protocol::{format_command, Command, Response};
-use crate::math::{Angle, Length};
+use crate::math::Length;
 use crate::model::estimator::Tracking;
 use crate::model::Motion;
 
@@ -63,13 +63,11 @@ impl<H: Hardware> Controller<H> {
     /// uncertainty breathes between corrections).
     pub(super) fn certain_enough(&self, slack: i32) -> Result<(), Refusal> {
         // several hypotheses, none dominating: the pose holds, no steering by it
-        if self.estimator.tracking() == crate::model::estimator::Tracking::Ambiguous {
+        if self.estimator.tracking() == Tracking::Ambiguous {
             return Err(Refusal::Uncertain);
         }
         let sigma = self.estimator.sigma();
-        let heading = Angle::from_millidegrees(config::goto::MAX_SIGMA_MDEG.saturating_mul(slack));
-        // a one-sigma heading is small and positive: compare the LSBs
-        if !position_steerable(sigma.x, sigma.y, slack) || sigma.theta.0 > heading.0 {
+        if !position_steerable(sigma.x, sigma.y, slack) || !heading_steerable(sigma.theta, slack) {
             Err(Refusal::Uncertain)
         } else {
             Ok(())
@@ -82,11 +80,10 @@ impl<H: Hardware> Controller<H> {
     /// compass's bias hides it while the robot stands) nor an unknown pose.
     fn settles_standing(&self, slack: i32) -> bool {
         let sigma = self.estimator.sigma();
-        let heading = Angle::from_millidegrees(config::goto::MAX_SIGMA_MDEG.saturating_mul(slack));
         self.estimator.contested()
             || (self.estimator.tracking() != Tracking::Unknown
                 && !position_steerable(sigma.x, sigma.y, slack)
-                && sigma.theta.0 <= heading.0)
+                && heading_steerable(sigma.theta, slack))
     }
 
     /// `# err <command>: <why>`.
@@ -110,7 +107,7 @@ impl<H: Hardware> Controller<H> {
     /// One `goto`/`face` tick: plan from the estimate, or arrive.
     pub(super) fn navigate(&mut self, now: Stamp, sink: &mut impl LineSink) {
         let Mode::Goto { mut nav, timer, .. } = self.mode else { return };
-        if self.certain_enough(if nav.answered { 2 } else { 1 }).is_err() {
+        if self.certain_enough(nav.slack()).is_err() {
             return self.unsettled(nav, timer, now, sink);
         }
         nav.settling = 0;
@@ -161,7 +158,7 @@ impl<H: Hardware> Controller<H> {
     /// goes on to the same target. One that started from a fix is stopped
     /// (refused if it had not started) instead of localizing again.
     fn unsettled(&mut self, mut nav: Nav, timer: Timer, now: Stamp, sink: &mut impl LineSink) {
-        if u32::from(nav.settling) < SETTLE_TICKS && self.settles_standing(if nav.answered { 2 } else { 1 }) {
+        if u32::from(nav.settling) < SETTLE_TICKS && self.settles_standing(nav.slack()) {
             nav.settling = nav.settling.saturating_add(1);
             self.mode = Mode::Goto { nav, drive: self.model.stop(), timer };
             return;
