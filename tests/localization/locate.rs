@@ -5,6 +5,7 @@
 //! `sim::realism::Realism::HARD`), the search finds the pose; the places
 //! it returns ([`Fix::clusters`]).
 
+use super::refine::{refine, TurnSamples};
 use crate::common;
 use common::rng::{random_pose_in_box, Rng};
 use paperbot::config;
@@ -19,8 +20,8 @@ use paperbot::sim::realism::{Realism, Trial};
 use paperbot::sim::robot::{body_fits, lidar_truth};
 
 /// The world a start is in: its realism and what the start drew from it.
-struct World {
-    realism: Realism,
+pub(crate) struct World {
+    pub(crate) realism: Realism,
     drawn: Drawn,
 }
 
@@ -93,6 +94,18 @@ fn view(w: &World, truth: &PoseF64, rng: &mut Rng) -> Readings {
 /// pivot behind the axle, and the body held where it would leave the box;
 /// in the hard world the run's turn factor and pivot too.
 fn turn(w: &World, start: &PoseF64, degrees: f64, rng: &mut Rng) -> PoseF64 {
+    turn_read(w, start, degrees, rng, None)
+}
+
+/// [`turn`], the lidars read while turning into `read` (the readings from
+/// their own random stream: the turn's draws stay what they were).
+fn turn_read(
+    w: &World,
+    start: &PoseF64,
+    degrees: f64,
+    rng: &mut Rng,
+    mut read: Option<(&mut TurnSamples, &mut Rng)>,
+) -> PoseF64 {
     let realism = w.realism;
     let arena = SimArena::default();
     let rate = 2.5f64.copysign(degrees); // rad/s, the `cw` of the lab's scripts
@@ -104,10 +117,13 @@ fn turn(w: &World, start: &PoseF64, degrees: f64, rng: &mut Rng) -> PoseF64 {
     let scale = w.drawn.turn_factor(degrees > 0.0, 0.0, &realism);
     let mut p = *start;
     for _ in 0..ticks {
-        let w = rate * scale * trial.speed_factor * (1.0 + rng.gauss(config::sim::TURN_NOISE));
-        let next = advance(&p, MotionF64::Turn(w), dt, Kinematics::Rigid, d);
+        let rate = rate * scale * trial.speed_factor * (1.0 + rng.gauss(config::sim::TURN_NOISE));
+        let next = advance(&p, MotionF64::Turn(rate), dt, Kinematics::Rigid, d);
         if body_fits(&arena, &realism, &next) {
             p = next;
+        }
+        if let Some((samples, rng)) = read.as_mut() {
+            samples.tick(w, &p, ticks, degrees > 0.0, rng);
         }
     }
     p
@@ -242,6 +258,18 @@ fn procedure(starts: usize, world: impl Fn(u64, &mut Rng) -> World) -> (Tally, T
 /// [`procedure`] with the search reading each range `share` (Q30) of the
 /// way from the cone's nearest wall point to the beam's axis.
 fn procedure_reading_the_spot(starts: usize, world: impl Fn(u64, &mut Rng) -> World, share: i32) -> (Tally, Tally) {
+    procedure_refined(starts, world, share, None)
+}
+
+/// [`procedure_reading_the_spot`]; with `refined`, each fix also refined
+/// with every reading of its survey, the turns' too (`refine.rs`), and
+/// tallied there.
+fn procedure_refined(
+    starts: usize,
+    world: impl Fn(u64, &mut Rng) -> World,
+    share: i32,
+    mut refined: Option<&mut Tally>,
+) -> (Tally, Tally) {
     let mut rng = Rng::new(2315);
     let (mut two, mut done) = (Tally::default(), Tally::default());
     let mut views_used = [0usize; MAX_VIEWS + 1];
@@ -252,8 +280,14 @@ fn procedure_reading_the_spot(starts: usize, world: impl Fn(u64, &mut Rng) -> Wo
         let mut views = vec![view(&w, &truth, &mut rng)];
         let mut biases = vec![wrap_pi(views[0].heading.to_radians_f64() - truth.theta)];
         let mut degrees = 45.0;
+        // the turns' readings, from a stream of their own
+        let mut turns_rng = Rng::new(9_000 + start as u64);
+        let mut turns = vec![];
         let fix = loop {
-            truth = turn(&w, &truth, degrees, &mut rng);
+            let mut samples = TurnSamples::default();
+            let read = refined.is_some().then_some((&mut samples, &mut turns_rng));
+            truth = turn_read(&w, &truth, degrees, &mut rng, read);
+            turns.push(samples);
             views.push(view(&w, &truth, &mut rng));
             biases.push(wrap_pi(views[views.len() - 1].heading.to_radians_f64() - truth.theta));
             // a body against a wall may not turn that way: the compass says
@@ -275,6 +309,15 @@ fn procedure_reading_the_spot(starts: usize, world: impl Fn(u64, &mut Rng) -> Wo
         };
         views_used[views.len()] += 1;
         why.add(fix.as_ref(), &truth, &biases);
+        if let Some(tally) = refined.as_deref_mut() {
+            let better = fix.map(|mut f| {
+                if let Some(p) = refine(&views, &turns, &f) {
+                    f.pose = p.to_pose();
+                }
+                f
+            });
+            tally.add(better, &truth);
+        }
         done.add(fix, &truth);
     }
     println!("  views taken (views, starts): {:?}", views_used.iter().enumerate().skip(3).collect::<Vec<_>>());
@@ -360,6 +403,37 @@ fn views_turned_in_place_in_the_hard_world() {
         "{} wrong fixes not flagged",
         done.wrong_unflagged.len()
     );
+}
+
+/// The same surveys' fixes refined with every reading the survey saw, the
+/// turns' too (`refine.rs`: one model of the turn about a fixed pivot, each
+/// view's heading its own, the compass's bias a mixture of the lab's and a
+/// disturbed floor's): an f64 reference for a step the firmware does not
+/// take yet. Measured, 300 starts each: the hard world 104 right and 82
+/// wrong and not flagged from the search, 258 and 24 refined (1,000
+/// starts: 361 and 255, 834 and 84; 960 within 30 mm whatever the
+/// heading); the lab's 298 and 0, 298 and 1 (1,000: 991 and 0, 985 and 9).
+/// Asserted: the refinement at least doubles the hard world's right fixes
+/// and leaves the lab's within 1 % of the search's. It does not meet issue
+/// #29's bar, and in the lab it turns a few right fixes wrong
+/// (docs/simulator.md, "Refining the fix"). Ignored for its time (45 s in
+/// release; `REFINE_STARTS` for more or fewer starts).
+#[test]
+#[ignore = "a minute in release; prints what refining the fix with every reading would give"]
+fn the_fix_refined_with_every_reading() {
+    let starts = std::env::var("REFINE_STARTS").ok().and_then(|s| s.parse().ok()).unwrap_or(300);
+    for (name, hard) in [("hard", true), ("lab", false)] {
+        let mut refined = Tally::default();
+        let world = |start: u64, rng: &mut Rng| if hard { World::hard(start, rng) } else { World::lab(rng) };
+        let (_, searched) = procedure_refined(starts, world, 0, Some(&mut refined));
+        searched.print(&format!("{name} world: the search's fixes"), starts);
+        refined.print(&format!("{name} world: the fixes refined with every reading"), starts);
+        if hard {
+            assert!(refined.right >= 2 * searched.right, "{} against {}", refined.right, searched.right);
+        } else {
+            assert!(refined.right * 100 >= searched.right * 99, "{} against {}", refined.right, searched.right);
+        }
+    }
 }
 
 /// Measured in the hard world, 1,000 starts (the test holds these levels).

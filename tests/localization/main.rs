@@ -7,3 +7,4 @@ mod common;
 
 mod localize;
 mod locate;
+mod refine;
