@@ -3,7 +3,8 @@
 //! world: the lidars' cones, their noise and glancing failures, the
 //! compass's noise and disturbance; the hard world: a robot drawn per start,
 //! `sim::realism::Realism::HARD`), the search finds the pose; the places
-//! it returns ([`Fix::clusters`]).
+//! it returns ([`Fix::clusters`]); and what refining its fix with every
+//! reading of the survey would give (`refine.rs`).
 
 use super::refine::{refine, TurnSamples};
 use crate::common;

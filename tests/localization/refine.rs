@@ -86,9 +86,8 @@ fn reading(w: &World, p: &PoseF64, lidar: Lidar, rng: &mut Rng) -> Option<f64> {
 
 /// Half the lidar's cone, radians.
 const HALF_CONE: f64 = config::lidar::CONE_DEG / 2.0 * PI / 180.0;
-/// A reading's sigma: the estimator's, and its growth with incidence
-/// (`config::estimator::LIDAR_SIGMA`, `LIDAR_INCIDENCE_SIGMA_MM`), mm.
-const LIDAR_SIGMA_MM: f64 = 2.0;
+/// A reading's growth of sigma with incidence, the estimator's (with its
+/// `config::estimator::LIDAR_SIGMA` at square), mm.
 const INCIDENCE_SIGMA_MM: f64 = config::estimator::LIDAR_INCIDENCE_SIGMA_MM;
 /// The loss's scale, sigmas (Welsch): a reading this far off weighs about
 /// a third, one much farther almost nothing (spurious echoes, corners).
@@ -106,9 +105,13 @@ const BIAS_MIX: (f64, f64, f64) = (0.7, config::estimator::COMPASS_SIGMA_DEG, 12
 /// degree or two, the hard world's spread by 5 to 8).
 const VIEW_MIX: (f64, f64, f64) = (0.7, 1.5, 6.0);
 /// The lever's prior, mm: the pivot anywhere the estimator allows
-/// (`config::estimator::PIVOT_MIN_MM` to `PIVOT_MAX_MM` behind the axle).
-const LEVER_MM: f64 = 56.0 + (config::estimator::PIVOT_MIN_MM + config::estimator::PIVOT_MAX_MM) / 2.0;
-const LEVER_SIGMA_MM: f64 = (config::estimator::PIVOT_MAX_MM - config::estimator::PIVOT_MIN_MM) / 3.0;
+/// (`config::estimator::PIVOT_MIN_MM` to `PIVOT_MAX_MM` behind the axle,
+/// the axle `config::geometry::ROTATION_TO_REFERENCE` behind the reference
+/// point); its mean and one sigma.
+fn lever_prior() -> (f64, f64) {
+    let (min, max) = (config::estimator::PIVOT_MIN_MM, config::estimator::PIVOT_MAX_MM);
+    (config::geometry::ROTATION_TO_REFERENCE.to_mm_f64() + (min + max) / 2.0, (max - min) / 3.0)
+}
 /// The fit stays near the search's place: one sigma, mm (at least the
 /// cluster's own spread).
 const NEAR_SIGMA_MM: f64 = 30.0;
@@ -228,6 +231,7 @@ impl Problem<'_> {
         out.clear();
         let (px, py, d, b, share) = (p[P_X], p[P_Y], p[P_D], p[P_B], p[P_S]);
         let place = |theta: f64| (px + d * theta.cos(), py + d * theta.sin());
+        let square = config::estimator::LIDAR_SIGMA.to_mm_f64();
         let lidars = |theta: f64, front: Option<f64>, right: Option<f64>, out: &mut Vec<(f64, bool)>| {
             let (x, y) = place(theta);
             for (lidar, z) in [(Lidar::Front, front), (Lidar::Right, right)] {
@@ -235,7 +239,7 @@ impl Problem<'_> {
                 let (beam, along) = lidar.beam(theta);
                 let r = expected(x, y, beam, along, share).map_or(2.0 * ROBUST, |(e, incidence, span)| {
                     let slope = INCIDENCE_SIGMA_MM * incidence.tan().min(4.0);
-                    (z - e) / (LIDAR_SIGMA_MM.powi(2) + slope.powi(2) + (span / 2.0).powi(2)).sqrt()
+                    (z - e) / (square.powi(2) + slope.powi(2) + (span / 2.0).powi(2)).sqrt()
                 });
                 out.push((r, true));
             }
@@ -254,7 +258,8 @@ impl Problem<'_> {
             }
         }
         out.push((mixture(b.to_degrees(), BIAS_MIX), false));
-        out.push(((d - LEVER_MM) / LEVER_SIGMA_MM, false));
+        let (lever, lever_sigma) = lever_prior();
+        out.push(((d - lever) / lever_sigma, false));
         let (x, y) = place(p[P_T + self.views.len() - 1]);
         let (nx, ny, sigma) = self.near;
         out.push(((x - nx) / sigma, false));
