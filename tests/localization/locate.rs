@@ -10,6 +10,7 @@ use super::refine::{refine, TurnSamples};
 use crate::common;
 use common::rng::{random_pose_in_box, Rng};
 use paperbot::config;
+use paperbot::control::survey::room::{positioning_mm, room_to_turn, Ahead};
 use paperbot::math::{Angle, Length};
 use paperbot::model::locate::{locate, locate_with_spot_share, Fix, Readings, Search, MAX_VIEWS};
 use paperbot::model::measurement::Arena;
@@ -23,7 +24,7 @@ use paperbot::sim::robot::{body_fits, lidar_truth};
 /// The world a start is in: its realism and what the start drew from it.
 pub(crate) struct World {
     pub(crate) realism: Realism,
-    drawn: Drawn,
+    pub(crate) drawn: Drawn,
 }
 
 impl World {
@@ -125,6 +126,23 @@ fn turn_read(
         }
         if let Some((samples, rng)) = read.as_mut() {
             samples.tick(w, &p, ticks, degrees > 0.0, rng);
+        }
+    }
+    p
+}
+
+/// A straight drive of about `mm` (back when negative) at the survey's
+/// speed, the run's speed scale, the body held where it would leave the box.
+fn drive(w: &World, start: &PoseF64, mm: f64, rng: &mut Rng) -> PoseF64 {
+    let speed = f64::from(config::locate::POSITION_MM_S).copysign(mm);
+    let dt = 1.0 / f64::from(config::timing::LOOP_HZ);
+    let ticks = (mm.abs() / speed.abs() / dt).round() as u32;
+    let mut p = *start;
+    for _ in 0..ticks {
+        let v = speed * w.drawn.speed_scale * (1.0 + rng.gauss(config::sim::SPEED_NOISE));
+        let next = advance(&p, MotionF64::Straight(v), dt, Kinematics::Rigid, 0.0);
+        if body_fits(&SimArena::default(), &w.realism, &next) {
+            p = next;
         }
     }
     p
@@ -262,9 +280,12 @@ fn procedure_reading_the_spot(starts: usize, world: impl Fn(u64, &mut Rng) -> Wo
     procedure_refined(starts, world, share, None)
 }
 
-/// [`procedure_reading_the_spot`]; with `refined`, each fix also refined
-/// with every reading of its survey, the turns' too (`refine.rs`), and
-/// tallied there.
+/// [`procedure_reading_the_spot`]; with `refined`, the survey makes room
+/// to turn as the firmware's does (`control::survey::room`: a drive before
+/// the first view, and a turn only where the last view shows room for it,
+/// the other way if not, no more views if neither way has room), and each
+/// fix is also refined with every reading of its survey, the turns' too
+/// (`refine.rs`), and tallied there.
 fn procedure_refined(
     starts: usize,
     world: impl Fn(u64, &mut Rng) -> World,
@@ -278,6 +299,14 @@ fn procedure_refined(
     for start in 0..starts {
         let mut truth = random_pose_in_box(&mut rng);
         let w = world(start as u64, &mut rng);
+        let make_room = refined.is_some();
+        if make_room {
+            // room to turn before the first view (its own random stream)
+            let mut room_rng = Rng::new(7_000 + start as u64);
+            let first = view(&w, &truth, &mut room_rng);
+            let mm = positioning_mm(first.front);
+            truth = drive(&w, &truth, f64::from(mm), &mut room_rng);
+        }
         let mut views = vec![view(&w, &truth, &mut rng)];
         let mut biases = vec![wrap_pi(views[0].heading.to_radians_f64() - truth.theta)];
         let mut degrees = 45.0;
@@ -285,6 +314,17 @@ fn procedure_refined(
         let mut turns_rng = Rng::new(9_000 + start as u64);
         let mut turns = vec![];
         let fix = loop {
+            if make_room {
+                let last = views[views.len() - 1];
+                let clockwise = degrees > 0.0;
+                if !room_to_turn(&last, clockwise, Ahead::Square) {
+                    if room_to_turn(&last, !clockwise, Ahead::Square) {
+                        degrees = -degrees;
+                    } else {
+                        break locate_with_spot_share(&Arena::DEFAULT, &views, share).ok();
+                    }
+                }
+            }
             let mut samples = TurnSamples::default();
             let read = refined.is_some().then_some((&mut samples, &mut turns_rng));
             truth = turn_read(&w, &truth, degrees, &mut rng, read);
@@ -410,15 +450,18 @@ fn views_turned_in_place_in_the_hard_world() {
 /// turns' too (`refine.rs`: one model of the turn about a fixed pivot, each
 /// view's heading its own, the compass's bias a mixture of the lab's and a
 /// disturbed floor's): an f64 reference for a step the firmware does not
-/// take yet. Measured, 300 starts each: the hard world 104 right and 82
-/// wrong and not flagged from the search, 258 and 24 refined (1,000
-/// starts: 361 and 255, 834 and 84; 960 within 30 mm whatever the
-/// heading); the lab's 298 and 0, 298 and 1 (1,000: 991 and 0, 985 and 9).
-/// Asserted: the refinement at least doubles the hard world's right fixes
-/// and leaves the lab's within 1 % of the search's. It does not meet issue
-/// #29's bar, and in the lab it turns a few right fixes wrong
-/// (docs/simulator.md, "Refining the fix"). Ignored for its time (45 s in
-/// release; `REFINE_STARTS` for more or fewer starts).
+/// take yet. The surveys make room to turn as the firmware's does
+/// ([`procedure_refined`]). Measured, 300 starts each: the hard world 113
+/// right and 59 wrong and not flagged from the search, 274 and 9 refined
+/// (1,000 starts: 368 and 170, 909 and 22; 967 within 30 mm whatever the
+/// heading); the lab's 292 and 1, 294 and 0 (1,000: 984 and 2, 989 and 1).
+/// Without making room the lab's refined fixes were worse than its
+/// search's (991 and 0, 985 and 9): turns blocked at a wall do not turn
+/// evenly. Asserted: the refinement at least doubles the hard world's right
+/// fixes and halves its wrong and not flagged, and the lab's are no worse.
+/// It does not meet issue #29's bar (docs/simulator.md, "Refining the
+/// fix"). Ignored for its time (45 s in release; `REFINE_STARTS` for more
+/// or fewer starts).
 #[test]
 #[ignore = "a minute in release; prints what refining the fix with every reading would give"]
 fn the_fix_refined_with_every_reading() {
@@ -429,10 +472,15 @@ fn the_fix_refined_with_every_reading() {
         let (_, searched) = procedure_refined(starts, world, 0, Some(&mut refined));
         searched.print(&format!("{name} world: the search's fixes"), starts);
         refined.print(&format!("{name} world: the fixes refined with every reading"), starts);
+        let (right, wrong) = (refined.right, refined.wrong_unflagged.len());
+        let (was_right, was_wrong) = (searched.right, searched.wrong_unflagged.len());
         if hard {
-            assert!(refined.right >= 2 * searched.right, "{} against {}", refined.right, searched.right);
+            assert!(
+                right >= 2 * was_right && 2 * wrong <= was_wrong,
+                "{right}, {wrong} against {was_right}, {was_wrong}"
+            );
         } else {
-            assert!(refined.right * 100 >= searched.right * 99, "{} against {}", refined.right, searched.right);
+            assert!(right >= was_right && wrong <= was_wrong, "{right}, {wrong} against {was_right}, {was_wrong}");
         }
     }
 }
