@@ -351,9 +351,11 @@ fn procedure_refined(
         views_used[views.len()] += 1;
         why.add(fix.as_ref(), &truth, &biases);
         if let Some(tally) = refined.as_deref_mut() {
+            // the search's flags kept (its places apart), the refinement's added
             let better = fix.map(|mut f| {
-                if let Some(p) = refine(&views, &turns, &f) {
-                    f.pose = p.to_pose();
+                if let Some(r) = refine(&views, &turns, &f) {
+                    f.pose = r.pose.to_pose();
+                    f.untrusted |= !r.vouched;
                 }
                 f
             });
@@ -451,13 +453,15 @@ fn views_turned_in_place_in_the_hard_world() {
 /// view's heading its own, the compass's bias a mixture of the lab's and a
 /// disturbed floor's): an f64 reference for a step the firmware does not
 /// take yet. The surveys make room to turn as the firmware's does
-/// ([`procedure_refined`]). Measured, 300 starts each: the hard world 113
-/// right and 59 wrong and not flagged from the search, 274 and 9 refined
-/// (1,000 starts: 368 and 170, 909 and 22; 967 within 30 mm whatever the
-/// heading); the lab's 292 and 1, 294 and 0 (1,000: 984 and 2, 989 and 1).
-/// Without making room the lab's refined fixes were worse than its
-/// search's (991 and 0, 985 and 9): turns blocked at a wall do not turn
-/// evenly. Asserted: the refinement at least doubles the hard world's right
+/// ([`procedure_refined`]); a refined fix keeps the search's flags and adds
+/// the refinement's (`Refined::vouched`). Measured, 300 starts each: the
+/// hard world 113 right and 59 wrong and not flagged from the search, 274
+/// and 3 refined (1,000 starts: 368 and 170, 909 and 7; 786 reported
+/// uncertain against 688; 967 within 30 mm whatever the heading); the
+/// lab's 292 and 1, 294 and 0 (1,000: 984 and 2, 989 and 1). Without
+/// making room the lab's refined fixes were worse than its search's (991
+/// and 0, 985 and 9): turns blocked at a wall do not turn evenly.
+/// Asserted: the refinement at least doubles the hard world's right
 /// fixes and halves its wrong and not flagged, and the lab's are no worse.
 /// It does not meet issue #29's bar (docs/simulator.md, "Refining the
 /// fix"). Ignored for its time (45 s in release; `REFINE_STARTS` for more

@@ -119,6 +119,14 @@ const NEAR_SIGMA_MM: f64 = 30.0;
 /// it by this much (cost, twice a log-likelihood): the lab's compass is
 /// right, and a turned heading can fit a cone's flat readings as well.
 const AWAY_MARGIN: f64 = 4.0;
+/// A fit the refinement vouches for costs at most this per reading: a
+/// reading within the model's noise costs about 0.9 (the bounded loss's
+/// mean for a normal residual), so this is readings fitting about twice
+/// as badly as the model's noise, on average.
+const FIT_LIMIT: f64 = 2.0;
+/// ... and no fit 30 mm or 5 degrees away costs within this more (twice
+/// the log of a likelihood ratio of 12).
+const RIVAL_GAP: f64 = 5.0;
 /// The starts: headings off the search's (its compass heading), degrees;
 /// levers (the lab's pivot, the issue's), mm; spot shares.
 const START_HEADINGS_DEG: [f64; 5] = [-16.0, -8.0, 0.0, 8.0, 16.0];
@@ -375,13 +383,23 @@ fn compass_rates(views: &[Readings], turns: &[TurnSamples]) -> (f64, f64) {
     (median(&mut per_way[1]), median(&mut per_way[0]))
 }
 
+/// The refined pose, and whether the fit vouches for it.
+pub(crate) struct Refined {
+    pub pose: PoseF64,
+    /// Its readings fit within [`FIT_LIMIT`] apiece and no other place or
+    /// heading fits within [`RIVAL_GAP`] of it.
+    pub vouched: bool,
+}
+
 /// The pose at the last view that best explains every reading, from
 /// starts around each of the fix's places; `None` without views.
-pub(crate) fn refine(views: &[Readings], turns: &[TurnSamples], fix: &Fix) -> Option<PoseF64> {
+pub(crate) fn refine(views: &[Readings], turns: &[TurnSamples], fix: &Fix) -> Option<Refined> {
     let last = views.len().checked_sub(1)?;
     let h_last = views[last].heading.to_radians_f64();
     let (cw, ccw) = compass_rates(views, turns);
-    let mut best: Option<(f64, PoseF64)> = None;
+    // every start's end: its cost, pose, and cost per reading
+    let mut ends: Vec<(f64, PoseF64, f64)> = vec![];
+    let mut scratch = vec![];
     for c in fix.clusters() {
         let at = PoseF64::from_pose(&fix.pose_of(c));
         let sigma = NEAR_SIGMA_MM.max(c.sigma_x.to_mm_f64()).max(c.sigma_y.to_mm_f64());
@@ -402,18 +420,21 @@ pub(crate) fn refine(views: &[Readings], turns: &[TurnSamples], fix: &Fix) -> Op
                     p.extend(views.iter().map(|v| theta + wrap_pi(v.heading.to_radians_f64() - h_last)));
                     let (q, cost) = problem.solve(p);
                     let cost = if dh == 0.0 { cost } else { cost + AWAY_MARGIN };
-                    if best.is_none_or(|(b, _)| cost < b) {
-                        let theta = q[P_T + last];
-                        let pose = PoseF64::new(
-                            q[P_X] + q[P_D] * theta.cos(),
-                            q[P_Y] + q[P_D] * theta.sin(),
-                            theta.rem_euclid(TAU),
-                        );
-                        best = Some((cost, pose));
-                    }
+                    let theta = q[P_T + last];
+                    let pose = PoseF64::new(
+                        q[P_X] + q[P_D] * theta.cos(),
+                        q[P_Y] + q[P_D] * theta.sin(),
+                        theta.rem_euclid(TAU),
+                    );
+                    problem.residuals(&q, &mut scratch);
+                    let readings = scratch.iter().filter(|r| r.1).count().max(1) as f64;
+                    ends.push((cost, pose, cost / readings));
                 }
             }
         }
     }
-    best.map(|(_, pose)| pose)
+    let &(cost, pose, per_reading) = ends.iter().min_by(|a, b| a.0.total_cmp(&b.0))?;
+    let apart = |p: &PoseF64| p.distance(&pose) > 30.0 || wrap_pi(p.theta - pose.theta).abs() > 5f64.to_radians();
+    let rival = ends.iter().filter(|e| apart(&e.1)).map(|e| e.0).fold(f64::INFINITY, f64::min);
+    Some(Refined { pose, vouched: per_reading <= FIT_LIMIT && rival - cost >= RIVAL_GAP })
 }
