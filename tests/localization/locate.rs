@@ -6,7 +6,7 @@
 //! it returns ([`Fix::clusters`]); and what refining its fix with every
 //! reading of the survey would give (`refine.rs`).
 
-use super::refine::{refine, TurnSamples};
+use super::refine::{refine, TurnSamples, EVALUATIONS};
 use crate::common;
 use common::rng::{random_pose_in_box, Rng};
 use paperbot::config;
@@ -20,6 +20,7 @@ use paperbot::sim::body::{advance, wrap_pi, Kinematics, MotionF64, PoseF64};
 use paperbot::sim::drawn::Drawn;
 use paperbot::sim::realism::{Realism, Trial};
 use paperbot::sim::robot::{body_fits, lidar_truth};
+use std::sync::atomic::Ordering;
 
 /// The world a start is in: its realism and what the start drew from it.
 pub(crate) struct World {
@@ -473,7 +474,10 @@ fn the_fix_refined_with_every_reading() {
     for (name, hard) in [("hard", true), ("lab", false)] {
         let mut refined = Tally::default();
         let world = |start: u64, rng: &mut Rng| if hard { World::hard(start, rng) } else { World::lab(rng) };
+        let before = EVALUATIONS.load(Ordering::Relaxed);
         let (_, searched) = procedure_refined(starts, world, 0, Some(&mut refined));
+        let per_fix = (EVALUATIONS.load(Ordering::Relaxed) - before) / starts.max(1) as u64;
+        println!("{name} world: the refinement evaluated the lidar model {per_fix} times a start");
         searched.print(&format!("{name} world: the search's fixes"), starts);
         refined.print(&format!("{name} world: the fixes refined with every reading"), starts);
         let (right, wrong) = (refined.right, refined.wrong_unflagged.len());

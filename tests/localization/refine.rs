@@ -27,6 +27,7 @@ use paperbot::sim::arena::Arena as SimArena;
 use paperbot::sim::body::{wrap_pi, PoseF64};
 use paperbot::sim::robot::lidar_truth;
 use std::f64::consts::{FRAC_PI_2, PI, TAU};
+use std::sync::atomic::{AtomicU64, Ordering};
 
 /// The lidars' readings during one turn between views.
 #[derive(Default, Clone, Debug)]
@@ -83,6 +84,11 @@ fn reading(w: &World, p: &PoseF64, lidar: Lidar, rng: &mut Rng) -> Option<f64> {
     let raw = model.reading_for(Length::from_mm_f64(d))?;
     model.range(raw).distance().map(|l| l.to_mm_f64())
 }
+
+/// The lidar model's evaluations so far (what a port would pay for: one
+/// is a `Beam` on the robot, about 900 lx106 instructions,
+/// lx106/BENCHMARKS.md).
+pub(crate) static EVALUATIONS: AtomicU64 = AtomicU64::new(0);
 
 /// Half the lidar's cone, radians.
 const HALF_CONE: f64 = config::lidar::CONE_DEG / 2.0 * PI / 180.0;
@@ -157,6 +163,7 @@ fn ray(x: f64, y: f64, dir: f64) -> Option<(f64, usize)> {
 /// wall point to the axis's; with the axis's incidence and how far apart
 /// the ranges a footprint spanning a corner mixes (0: one wall).
 fn expected(x: f64, y: f64, beam: f64, along: f64, share: f64) -> Option<(f64, f64, f64)> {
+    EVALUATIONS.fetch_add(1, Ordering::Relaxed);
     let a = SimArena::default();
     let (lx, wy) = (a.length_x_mm(), a.width_y_mm());
     if !(0.0..=lx).contains(&x) || !(0.0..=wy).contains(&y) {
