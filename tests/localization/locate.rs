@@ -457,8 +457,8 @@ fn views_turned_in_place_in_the_hard_world() {
 /// ([`procedure_refined`]); a refined fix keeps the search's flags and adds
 /// the refinement's (`Refined::vouched`). Measured, 300 starts each: the
 /// hard world 113 right and 59 wrong and not flagged from the search, 274
-/// and 3 refined (1,000 starts: 368 and 170, 909 and 7; 786 reported
-/// uncertain against 688; 967 within 30 mm whatever the heading); the
+/// and 3 refined (1,000 starts: 368 and 170, 912 and 7; 785 reported
+/// uncertain against 688; 969 within 30 mm whatever the heading); the
 /// lab's 292 and 1, 294 and 0 (1,000: 984 and 2, 989 and 1). Without
 /// making room the lab's refined fixes were worse than its search's (991
 /// and 0, 985 and 9): turns blocked at a wall do not turn evenly.
