@@ -23,6 +23,7 @@ use crate::common::rng::Rng;
 use paperbot::config;
 use paperbot::math::Length;
 use paperbot::model::locate::{Fix, Readings};
+use paperbot::model::measurement::LidarId;
 use paperbot::sim::arena::Arena as SimArena;
 use paperbot::sim::body::{wrap_pi, PoseF64};
 use paperbot::sim::robot::lidar_truth;
@@ -49,38 +50,28 @@ impl TurnSamples {
         (self.ticks, self.clockwise) = (ticks, clockwise);
         if self.ticks_done % 3 == 0 {
             let done = f64::from(self.ticks_done) / f64::from(ticks.max(1));
-            self.samples.push((done, reading(w, p, Lidar::Front, rng), reading(w, p, Lidar::Right, rng)));
+            self.samples.push((done, reading(w, p, LidarId::Front, rng), reading(w, p, LidarId::Right, rng)));
         }
     }
 }
 
-#[derive(Clone, Copy, PartialEq)]
-enum Lidar {
-    Front,
-    Right,
-}
-
-impl Lidar {
-    /// The beam's direction from the heading, and how far along its beam
-    /// the lidar sits from the reference point, mm (both beams run through
-    /// the reference point: a reading is the distance from it).
-    fn beam(self, theta: f64) -> (f64, f64) {
-        let mount = match self {
-            Lidar::Front => config::geometry::FRONT_LIDAR,
-            Lidar::Right => config::geometry::RIGHT_LIDAR,
-        };
-        (theta + mount.direction.to_radians_f64(), mount.along_beam_mm())
-    }
+/// The beam's direction from the heading, and how far along its beam the
+/// lidar sits from the reference point, mm (both beams run through the
+/// reference point: a reading is the distance from it).
+fn beam_of(lidar: LidarId, theta: f64) -> (f64, f64) {
+    let mount = lidar.mount();
+    (theta + mount.direction.to_radians_f64(), mount.along_beam_mm())
 }
 
 /// One reading as the firmware gets it: the simulator's range with its
 /// noise, through the lidar's model and back.
-fn reading(w: &World, p: &PoseF64, lidar: Lidar, rng: &mut Rng) -> Option<f64> {
-    let (mount, model) = match lidar {
-        Lidar::Front => (config::geometry::FRONT_LIDAR, config::lidar::FRONT),
-        Lidar::Right => (config::geometry::RIGHT_LIDAR, config::lidar::RIGHT),
+fn reading(w: &World, p: &PoseF64, lidar: LidarId, rng: &mut Rng) -> Option<f64> {
+    let model = match lidar {
+        LidarId::Front => config::lidar::FRONT,
+        LidarId::Right => config::lidar::RIGHT,
     };
-    let d = lidar_truth(&SimArena::default(), &w.realism, p, &mount, rng)? + rng.gauss(config::sim::LIDAR_NOISE_MM);
+    let d =
+        lidar_truth(&SimArena::default(), &w.realism, p, &lidar.mount(), rng)? + rng.gauss(config::sim::LIDAR_NOISE_MM);
     let raw = model.reading_for(Length::from_mm_f64(d))?;
     model.range(raw).distance().map(|l| l.to_mm_f64())
 }
@@ -160,10 +151,13 @@ fn ray(x: f64, y: f64, dir: f64) -> Option<(f64, usize)> {
         .min_by(|a, b| a.0.total_cmp(&b.0))
 }
 
-/// What a lidar reads with the reference point at (x, y) and its beam at
-/// `beam`, `along` mm from it: `share` of the way from the cone's nearest
-/// wall point to the axis's; with the axis's incidence and how far apart
-/// the ranges a footprint spanning a corner mixes (0: one wall).
+/// What the fit expects a lidar to read (written apart from the simulator's
+/// `sim::realism::lidar_range`, the world's truth: a belief shared by the
+/// world and the model of it would pass unseen), with the reference point
+/// at (x, y) and its beam at `beam`, `along` mm from it: `share` of the way
+/// from the cone's nearest wall point to the axis's; with the axis's
+/// incidence and how far apart the ranges a footprint spanning a corner
+/// mixes (0: one wall).
 fn expected(x: f64, y: f64, beam: f64, along: f64, share: f64) -> Option<(f64, f64, f64)> {
     EVALUATIONS.fetch_add(1, Ordering::Relaxed);
     let a = SimArena::default();
@@ -251,9 +245,9 @@ impl Problem<'_> {
         let square = config::estimator::LIDAR_SIGMA.to_mm_f64();
         let lidars = |theta: f64, front: Option<f64>, right: Option<f64>, out: &mut Vec<(f64, bool)>| {
             let (x, y) = place(theta);
-            for (lidar, z) in [(Lidar::Front, front), (Lidar::Right, right)] {
+            for (lidar, z) in [(LidarId::Front, front), (LidarId::Right, right)] {
                 let Some(z) = z else { continue };
-                let (beam, along) = lidar.beam(theta);
+                let (beam, along) = beam_of(lidar, theta);
                 let r = expected(x, y, beam, along, share).map_or(2.0 * ROBUST, |(e, incidence, span)| {
                     let slope = INCIDENCE_SIGMA_MM * incidence.tan().min(4.0);
                     (z - e) / (square.powi(2) + slope.powi(2) + (span / 2.0).powi(2)).sqrt()
