@@ -97,6 +97,12 @@ pub const MIN_VIEWS: usize = 4;
 pub const TURN_DEG: i32 = 45;
 /// Its rate, mrad/s: `goto`'s turn rate (`goto::TURN_MRAD_S`).
 pub const TURN_MRAD_S: i32 = super::goto::TURN_MRAD_S;
+/// Pairs of lidar readings kept from each turn between views, for
+/// refining the search's fix (`model::locate::turns`): a one-step turn
+/// (33 ticks at `TURN_MRAD_S`) brings ten, a lidar's reading every 3.3
+/// ticks; a longer one keeps every second, third, ... pair. 5 bytes each,
+/// in DRAM for up to seven turns (`model::locate::MAX_VIEWS` views).
+pub const TURN_SAMPLES: usize = 12;
 /// The body stands this long after a turn before its view is taken,
 /// ms: the servos stop within a tick (data `servo_runs.csv`), and a
 /// lidar reading begun while turning (33 ms each) is over.

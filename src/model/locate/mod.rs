@@ -58,6 +58,7 @@
 //! spreads it over its ticks.
 
 pub mod clusters;
+pub mod turns;
 mod view;
 
 pub use clusters::{Cluster, MAX_CLUSTERS};
