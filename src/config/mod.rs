@@ -38,6 +38,7 @@ pub mod timing;
 
 // the estimator
 pub mod estimator;
+pub mod refine;
 
 // host only: replay's verdict on a drive
 pub mod replay;

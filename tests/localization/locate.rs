@@ -12,6 +12,8 @@ use common::rng::{random_pose_in_box, Rng};
 use paperbot::config;
 use paperbot::control::survey::room::{positioning_mm, room_to_turn, Ahead};
 use paperbot::math::{Angle, Length};
+use paperbot::model::locate::refine::Refine;
+use paperbot::model::locate::turns::Turn;
 use paperbot::model::locate::{locate, locate_with_spot_share, Fix, Readings, Search, MAX_VIEWS};
 use paperbot::model::measurement::Arena;
 use paperbot::model::LidarModel;
@@ -278,7 +280,7 @@ fn procedure(starts: usize, world: impl Fn(u64, &mut Rng) -> World) -> (Tally, T
 /// [`procedure`] with the search reading each range `share` (Q30) of the
 /// way from the cone's nearest wall point to the beam's axis.
 fn procedure_reading_the_spot(starts: usize, world: impl Fn(u64, &mut Rng) -> World, share: i32) -> (Tally, Tally) {
-    procedure_refined(starts, world, share, None)
+    procedure_refined(starts, world, share, None, None)
 }
 
 /// [`procedure_reading_the_spot`]; with `refined`, the survey makes room
@@ -292,6 +294,7 @@ fn procedure_refined(
     world: impl Fn(u64, &mut Rng) -> World,
     share: i32,
     mut refined: Option<&mut Tally>,
+    mut robot: Option<(&mut Tally, &mut u64)>,
 ) -> (Tally, Tally) {
     let mut rng = Rng::new(2315);
     let (mut two, mut done) = (Tally::default(), Tally::default());
@@ -356,6 +359,25 @@ fn procedure_refined(
             let better = fix.map(|mut f| {
                 if let Some(r) = refine(&views, &turns, &f) {
                     f.pose = r.pose.to_pose();
+                    f.untrusted |= !r.vouched;
+                }
+                f
+            });
+            tally.add(better, &truth);
+        }
+        if let Some((tally, passes)) = robot.as_mut() {
+            // the robot's refinement (fixed point), from the same readings
+            let turns: Vec<Turn> = turns.iter().map(TurnSamples::to_turn).collect();
+            let better = fix.map(|mut f| {
+                let mut r = Refine::new(&f, &views, &turns);
+                let refined = loop {
+                    **passes += 1;
+                    if let Some(done) = r.step(&Arena::DEFAULT, &views, &turns) {
+                        break done;
+                    }
+                };
+                if let Some(r) = refined {
+                    f.pose = r.pose;
                     f.untrusted |= !r.vouched;
                 }
                 f
@@ -474,12 +496,15 @@ fn the_fix_refined_with_every_reading() {
     for (name, hard) in [("hard", true), ("lab", false)] {
         let mut refined = Tally::default();
         let world = |start: u64, rng: &mut Rng| if hard { World::hard(start, rng) } else { World::lab(rng) };
+        let (mut robot, mut passes) = (Tally::default(), 0u64);
         let before = EVALUATIONS.load(Ordering::Relaxed);
-        let (_, searched) = procedure_refined(starts, world, 0, Some(&mut refined));
+        let (_, searched) = procedure_refined(starts, world, 0, Some(&mut refined), Some((&mut robot, &mut passes)));
         let per_fix = (EVALUATIONS.load(Ordering::Relaxed) - before) / starts.max(1) as u64;
         println!("{name} world: the refinement evaluated the lidar model {per_fix} times a start");
+        println!("{name} world: the robot's refinement took {} passes a start", passes / starts.max(1) as u64);
         searched.print(&format!("{name} world: the search's fixes"), starts);
         refined.print(&format!("{name} world: the fixes refined with every reading"), starts);
+        robot.print(&format!("{name} world: the fixes refined by the robot's fit (fixed point)"), starts);
         let (right, wrong) = (refined.right, refined.wrong_unflagged.len());
         let (was_right, was_wrong) = (searched.right, searched.wrong_unflagged.len());
         if hard {

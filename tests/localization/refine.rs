@@ -22,6 +22,7 @@ use super::locate::World;
 use crate::common::rng::Rng;
 use paperbot::config;
 use paperbot::math::Length;
+use paperbot::model::locate::turns::{Turn, SAMPLES};
 use paperbot::model::locate::{Fix, Readings};
 use paperbot::model::measurement::LidarId;
 use paperbot::sim::arena::Arena as SimArena;
@@ -52,6 +53,26 @@ impl TurnSamples {
             let done = f64::from(self.ticks_done) / f64::from(ticks.max(1));
             self.samples.push((done, reading(w, p, LidarId::Front, rng), reading(w, p, LidarId::Right, rng)));
         }
+    }
+}
+
+impl TurnSamples {
+    /// The same readings as the robot's survey keeps them
+    /// (`model::locate::turns`: whole mm, at their ticks, a longer turn's
+    /// spread over it).
+    pub(crate) fn to_turn(&self) -> Turn {
+        let steps = self.samples.len().div_ceil(SAMPLES).max(1) as u8;
+        let mut turn = Turn::new(self.clockwise, steps);
+        for &(done, front, right) in &self.samples {
+            let tick = (done * f64::from(self.ticks)).round() as u16;
+            for (id, d) in [(LidarId::Front, front), (LidarId::Right, right)] {
+                if let Some(d) = d {
+                    turn.push(id, tick, Length::from_mm_f64(d.round()));
+                }
+            }
+        }
+        turn.end(self.ticks as u16);
+        turn
     }
 }
 

@@ -58,6 +58,7 @@
 //! spreads it over its ticks.
 
 pub mod clusters;
+pub mod refine;
 pub mod turns;
 mod view;
 

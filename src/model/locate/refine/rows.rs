@@ -1,0 +1,337 @@
+//! The survey's model, one row at a time: each reading's residual in its
+//! sigmas and how it moves with the parameters (closed form: the beam's
+//! own derivatives, [`Beam::heading_lever`], as the estimator's update
+//! takes them, chained through the pivot and the lever).
+//!
+//! # The parameters ([`Params`])
+//! The body turns about a pivot `P` that stays put over the survey; the
+//! reference point sits at a lever `D` from it, at `P + D (cos t, sin t)`
+//! with `t` the heading. Each view has its own heading `t_i`; the compass
+//! reads `t_i + b`, a bias `b` common to the views give or take a little;
+//! each way's turns run at one rate (angle per tick); a turn's readings sit
+//! at headings between its two views', in proportion to its ticks.
+//!
+//! # Units
+//! A parameter is stored in its fixed-point LSB ([`UNITS`]: a position or
+//! the lever in Q16 mm, an angle in [`Angle`] LSB, a rate in angle LSB a
+//! tick) and stepped in its unit (1 mm, 1 mrad, [`RATE_UNIT`]). A residual
+//! is Q12 sigmas, a row's derivatives Q12 sigmas a unit.
+
+use super::Share;
+use crate::config::estimator as est;
+use crate::config::refine as cfg;
+use crate::math::{div_i64, isqrt64, sin_cos, Angle, Coord, Length};
+use crate::model::locate::turns::Turn;
+use crate::model::locate::{Readings, MAX_VIEWS};
+use crate::model::measurement::{Arena, Beam, LidarId, Wall};
+use crate::model::state::Pose;
+
+/// The parameters' places: the pivot, the lever, the compass's bias, each
+/// way's turn a tick (both positive), then the views' headings.
+pub const PX: usize = 0;
+pub const PY: usize = 1;
+pub const LEVER: usize = 2;
+pub const BIAS: usize = 3;
+pub const CW: usize = 4;
+pub const CCW: usize = 5;
+pub const HEADING: usize = 6;
+/// Parameters at most.
+pub const MAX_PARAMS: usize = HEADING + MAX_VIEWS;
+
+pub type Params = [i64; MAX_PARAMS];
+
+/// One mrad in angle LSB.
+pub const MRAD: i64 = Angle::from_radians_f64(0.001).0 as i64;
+/// A rate's unit: one mrad over a 32-tick turn (a quarter turn's
+/// 33 ticks at `goto::TURN_MRAD_S`), angle LSB a tick.
+pub const RATE_UNIT: i64 = MRAD / 32;
+const MM: i64 = 1 << 16;
+/// Each parameter's unit in its LSB.
+pub const UNITS: Params = {
+    let mut u = [MRAD; MAX_PARAMS];
+    (u[PX], u[PY], u[LEVER], u[CW], u[CCW]) = (MM, MM, MM, RATE_UNIT, RATE_UNIT);
+    u
+};
+
+/// Q12: a residual's and a derivative's scale (sigmas).
+pub const ONE_SIGMA: i64 = 1 << 12;
+/// The bounded loss's scale (Q12).
+pub const ROBUST: i64 = (cfg::ROBUST_SIGMAS * ONE_SIGMA as f64) as i64;
+/// A reading whose reference point leaves the box: this many sigmas
+/// (the reference's two bounds), no derivative.
+const OUTSIDE: i64 = 2 * ROBUST;
+/// Residuals are held within this (2^12 sigmas: squares stay far from
+/// i64's bound).
+const R_MAX: i64 = 1 << 24;
+
+/// `2^40 / sigma` for a sigma in `lsb` units: a value in those units times
+/// it, `>> 28`, is Q12 sigmas.
+const fn inv(sigma_lsb: f64) -> i64 {
+    ((1u64 << 40) as f64 / sigma_lsb) as i64
+}
+const fn deg(d: f64) -> f64 {
+    Angle::from_degrees_f64(d).0 as f64
+}
+
+/// A max-mixture prior: the inverse sigmas of its narrow and wide parts
+/// and what the wide part costs over the narrow one at zero (Q24), twice
+/// `ln((wide / narrow) (share / (1 - share)))`.
+#[derive(Clone, Copy)]
+struct Mixture {
+    narrow: i64,
+    wide: i64,
+    extra: i64,
+}
+
+const fn mixture((share, narrow, wide): (f64, f64, f64)) -> Mixture {
+    let extra = 2.0 * crate::math::ln_f64(wide / narrow * share / (1.0 - share));
+    Mixture { narrow: inv(deg(narrow)), wide: inv(deg(wide)), extra: (extra * (ONE_SIGMA * ONE_SIGMA) as f64) as i64 }
+}
+
+const BIAS_PRIOR: Mixture = mixture(cfg::BIAS_MIX);
+const VIEW_PRIOR: Mixture = mixture(cfg::VIEW_MIX);
+const TURN_INV: i64 = inv(deg(cfg::TURN_SIGMA_DEG));
+/// The lever's prior: the pivot anywhere the estimator allows
+/// (`PIVOT_MIN_MM` to `PIVOT_MAX_MM` behind the axle), its mean and a
+/// third of the range as one sigma.
+const LEVER_MEAN: i64 = Length::from_mm_f64(
+    crate::config::geometry::ROTATION_TO_REFERENCE.0 as f64 / 65536.0 + (est::PIVOT_MIN_MM + est::PIVOT_MAX_MM) / 2.0,
+)
+.0 as i64;
+const LEVER_INV: i64 = inv((est::PIVOT_MAX_MM - est::PIVOT_MIN_MM) / 3.0 * 65536.0);
+/// A lidar reading's variance, mm^2 Q16: the model's spread at square,
+/// its growth with the axis's incidence (`tan^2`, at most 16: 76
+/// degrees, the reference's bound), a corner's mixed returns.
+const LIDAR_VAR: i64 = (est::LIDAR_SIGMA.0 as i64 * est::LIDAR_SIGMA.0 as i64) >> 16;
+const INCIDENCE_VAR: i64 = (est::LIDAR_INCIDENCE_SIGMA_MM * est::LIDAR_INCIDENCE_SIGMA_MM * 65536.0) as i64;
+const CORNER_VAR: i64 = (cfg::CORNER_SIGMA_MM * cfg::CORNER_SIGMA_MM * 65536.0) as i64;
+const TAN2_MAX: i64 = 16 << 16;
+const Q30: i64 = 1 << 30;
+/// 1/1000 in Q30: a derivative per rad to one per mrad.
+const PER_MRAD: i64 = Q30 / 1000;
+
+/// The heading step of the axis's numerical derivative (2 mrad, the
+/// reference's), angle LSB, and its inverse in rad.
+const TURN_STEP: i64 = 2 * MRAD;
+const PER_TURN_STEP: i64 = 500;
+
+/// How a row counts in the cost.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub enum Loss {
+    /// A reading (or a turn): bounded ([`ROBUST`]).
+    Robust,
+    /// A prior: its square, plus a constant (Q24) when the wide part of a
+    /// mixture explains it.
+    Square(i64),
+}
+
+/// One residual (Q12 sigmas) and its derivatives (Q12 sigmas a unit) by
+/// the parameters they are not zero for.
+#[derive(Clone, Copy, Debug)]
+pub struct Row {
+    pub r: i64,
+    pub cols: [(usize, i64); 5],
+    pub len: usize,
+    pub loss: Loss,
+}
+
+impl Row {
+    fn new(r: i64, loss: Loss) -> Row {
+        Row { r: r.clamp(-R_MAX, R_MAX), cols: [(0, 0); 5], len: 0, loss }
+    }
+
+    fn with(mut self, k: usize, d: i64) -> Row {
+        if let Some(slot) = self.cols.get_mut(self.len) {
+            *slot = (k, d.clamp(-R_MAX, R_MAX));
+            self.len = self.len.saturating_add(1);
+        }
+        self
+    }
+
+    pub fn cols(&self) -> &[(usize, i64)] {
+        self.cols.get(..self.len).unwrap_or(&[])
+    }
+}
+
+/// `a b >> s`, saturated.
+fn mul_shr(a: i64, b: i64, s: u32) -> i64 {
+    a.saturating_mul(b) >> s
+}
+
+/// Where a reading's heading comes from: one view's, or a turn's two
+/// views' weighed by how far through the turn it came (Q16).
+#[derive(Clone, Copy)]
+struct At {
+    theta: i64,
+    from: (usize, i64),
+    to: (usize, i64),
+}
+
+/// The survey's readings, and the start's fixed choices.
+pub struct Model<'a> {
+    pub arena: &'a Arena,
+    pub views: &'a [Readings],
+    pub turns: &'a [Turn],
+    pub share: Share,
+    /// The search's place for the last view (Q16 mm) and `2^40 / sigma`.
+    pub near: (i64, i64, i64),
+}
+
+impl Model<'_> {
+    /// Parameters in use: the views' headings after the common ones.
+    pub fn params(&self) -> usize {
+        HEADING.saturating_add(self.views.len().min(MAX_VIEWS))
+    }
+
+    /// Every row at `p`, in order: the views (lidars, compass), the turns
+    /// (the turn itself, its readings), then the priors; the derivatives
+    /// only when asked for (the cost needs none).
+    pub fn rows(&self, p: &Params, derivatives: bool, mut f: impl FnMut(&Row)) {
+        let get = |k: usize| p.get(k).copied().unwrap_or(0);
+        let views = self.views.get(..MAX_VIEWS).unwrap_or(self.views);
+        for (i, v) in views.iter().enumerate() {
+            let k = HEADING.saturating_add(i);
+            let at = At { theta: get(k), from: (k, 1 << 16), to: (k, 0) };
+            for (id, z) in [(LidarId::Front, v.front), (LidarId::Right, v.right)] {
+                if let Some(z) = z {
+                    f(&self.lidar(p, at, id, z, derivatives));
+                }
+            }
+            let predicted = get(k).saturating_add(get(BIAS));
+            let miss = i64::from(v.heading.diff(Angle(predicted as u32)));
+            f(&mixed(miss, VIEW_PRIOR, &[k, BIAS], -1));
+        }
+        for (j, t) in self.turns.iter().enumerate().take(views.len().saturating_sub(1)) {
+            let (from, to) = (HEADING.saturating_add(j), HEADING.saturating_add(j).saturating_add(1));
+            let (a, b) = (get(from), get(to));
+            let ticks = i64::from(t.ticks);
+            if ticks > 0 {
+                let (rate, way) = if t.clockwise { (get(CW), 1) } else { (get(CCW).saturating_neg(), -1) };
+                let miss = b.saturating_sub(a).saturating_sub(rate.saturating_mul(ticks));
+                let d = mul_shr(MRAD, TURN_INV, 28);
+                let dr = mul_shr(ticks.saturating_mul(RATE_UNIT), TURN_INV, 28).saturating_mul(-way);
+                let rate_col = if t.clockwise { CW } else { CCW };
+                f(&Row::new(mul_shr(miss, TURN_INV, 28), Loss::Robust).with(to, d).with(from, -d).with(rate_col, dr));
+            }
+            for s in t.samples() {
+                let done = div_i64(i64::from(s.tick) << 16, ticks.max(1)).unwrap_or(0).clamp(0, 1 << 16);
+                let theta = a.saturating_add(mul_shr(b.saturating_sub(a), done, 16));
+                let at = At { theta, from: (from, (1 << 16) - done), to: (to, done) };
+                for id in [LidarId::Front, LidarId::Right] {
+                    if let Some(z) = s.distance(id) {
+                        f(&self.lidar(p, at, id, z, derivatives));
+                    }
+                }
+            }
+        }
+        let bias = i64::from(Angle(get(BIAS) as u32).diff(Angle::ZERO));
+        f(&mixed(bias, BIAS_PRIOR, &[BIAS], 1));
+        let lever = get(LEVER).saturating_sub(LEVER_MEAN);
+        f(&Row::new(mul_shr(lever, LEVER_INV, 28), Loss::Square(0)).with(LEVER, mul_shr(MM, LEVER_INV, 28)));
+        let last = HEADING.saturating_add(views.len().saturating_sub(1));
+        let (s, c) = sin_cos(Angle(get(last) as u32));
+        let d = get(LEVER);
+        let (nx, ny, inv) = self.near;
+        let x = get(PX).saturating_add(mul_shr(d, i64::from(c), 30));
+        let y = get(PY).saturating_add(mul_shr(d, i64::from(s), 30));
+        let per = |v: i64| mul_shr(v, inv, 28);
+        let turn_x = mul_shr(mul_shr(d, -i64::from(s), 30), PER_MRAD, 30);
+        let turn_y = mul_shr(mul_shr(d, i64::from(c), 30), PER_MRAD, 30);
+        f(&Row::new(per(x.saturating_sub(nx)), Loss::Square(0))
+            .with(PX, per(MM))
+            .with(LEVER, per(i64::from(c) >> 14))
+            .with(last, per(turn_x)));
+        f(&Row::new(per(y.saturating_sub(ny)), Loss::Square(0))
+            .with(PY, per(MM))
+            .with(LEVER, per(i64::from(s) >> 14))
+            .with(last, per(turn_y)));
+    }
+
+    /// A lidar's reading `z` with the body at heading `at`.
+    fn lidar(&self, p: &Params, at: At, id: LidarId, z: Length, derivatives: bool) -> Row {
+        let get = |k: usize| p.get(k).copied().unwrap_or(0);
+        let theta = Angle(at.theta as u32);
+        let (s, c) = sin_cos(theta);
+        let (s, c) = (i64::from(s), i64::from(c));
+        let d = get(LEVER);
+        let x = get(PX).saturating_add(mul_shr(d, c, 30));
+        let y = get(PY).saturating_add(mul_shr(d, s, 30));
+        let (lx, wy) = (i64::from(self.arena.length_x.0), i64::from(self.arena.width_y.0));
+        if !(0..=lx).contains(&x) || !(0..=wy).contains(&y) {
+            return Row::new(OUTSIDE, Loss::Robust);
+        }
+        let pose = Pose::new(Coord::from_length(Length(x as i32)), Coord::from_length(Length(y as i32)), theta);
+        let beam = Beam::new(self.arena, &pose, &id.mount());
+        let share = self.share.q30();
+        let spread = i64::from(beam.spot_spread(z).0);
+        let nu = i64::from(beam.normal_miss(z).0).saturating_sub(mul_shr(spread, share, 30));
+        // d(nu)/d(reference point) is +1 along the wall's normal for the
+        // north and east walls, -1 for the others; d(nu)/d(heading) is
+        // minus that times the beam's lever (`Beam::heading_lever`)
+        let sign: i64 = if matches!(beam.wall, Wall::North | Wall::East) { 1 } else { -1 };
+        let on_x = beam.wall.is_x_wall();
+        let (toward, swing) = if on_x { (c, mul_shr(d, -s, 30)) } else { (s, mul_shr(d, c, 30)) };
+        let turning = match self.share {
+            // the cone's nearest point: the beam's own lever
+            Share::Nearest => i64::from(beam.heading_lever(z).0).saturating_mul(-sign),
+            // the axis's: its incidence changes too, by a difference
+            // (one more beam, for the derivatives only)
+            Share::Axis if derivatives => {
+                let turned = Pose::new(pose.x, pose.y, theta.wrapping_add(Angle(TURN_STEP as u32)));
+                let beam = Beam::new(self.arena, &turned, &id.mount());
+                let spread = i64::from(beam.spot_spread(z).0);
+                let turned_nu = i64::from(beam.normal_miss(z).0).saturating_sub(spread);
+                turned_nu.saturating_sub(nu).saturating_mul(PER_TURN_STEP)
+            }
+            Share::Axis => 0,
+        };
+        let per_rad = swing.saturating_mul(sign).saturating_add(turning);
+        let per_mrad = mul_shr(per_rad, PER_MRAD, 30);
+        let inv = self.inverse_sigma(&beam);
+        let per = |v: i64| mul_shr(v, inv, 28);
+        let (px, py) = if on_x { (sign.saturating_mul(MM), 0) } else { (0, sign.saturating_mul(MM)) };
+        let dt = per(per_mrad);
+        let row = Row::new(per(nu), Loss::Robust).with(PX, per(px)).with(PY, per(py));
+        let row = row.with(LEVER, per(sign.saturating_mul(toward) >> 14));
+        let row = row.with(at.from.0, mul_shr(dt, at.from.1, 16));
+        if at.to.1 != 0 {
+            row.with(at.to.0, mul_shr(dt, at.to.1, 16))
+        } else {
+            row
+        }
+    }
+
+    /// `2^40 / sigma` of a reading along its wall's normal (Q16 mm): the
+    /// range's variance (the model's spread, the incidence's, a corner's)
+    /// times the squared cosine the miss is measured with (the cone's
+    /// nearest point's, or the axis's at the axis's share).
+    fn inverse_sigma(&self, beam: &Beam) -> i64 {
+        let (cone, axis) = (i64::from(beam.cone_normal), i64::from(beam.normal));
+        let axis2 = mul_shr(axis, axis, 30);
+        let tan2 = div_i64(Q30.saturating_sub(axis2) << 16, axis2).unwrap_or(TAN2_MAX).min(TAN2_MAX);
+        let mut var = LIDAR_VAR.saturating_add(mul_shr(INCIDENCE_VAR, tan2, 16));
+        if beam.near_corner(est::CORNER_MARGIN) {
+            var = var.saturating_add(CORNER_VAR);
+        }
+        let cos = cone.saturating_sub(mul_shr(cone.saturating_sub(axis), self.share.q30(), 30));
+        let var = mul_shr(var, mul_shr(cos, cos, 30), 30);
+        // at least a sixteenth of a mm (a beam along the wall)
+        let sigma = i64::from(isqrt64((var.max(1) as u64) << 16)).max(1 << 12);
+        div_i64(1 << 40, sigma).unwrap_or(0)
+    }
+}
+
+/// A max-mixture prior's row for `miss` (angle LSB) in the parameters
+/// `cols`, each moving it by `sign` mrad a unit: the part that explains
+/// it better.
+fn mixed(miss: i64, m: Mixture, cols: &[usize], sign: i64) -> Row {
+    let narrow = mul_shr(miss, m.narrow, 28);
+    let wide = mul_shr(miss, m.wide, 28);
+    let (r, inv, extra) = if narrow.saturating_mul(narrow) <= wide.saturating_mul(wide).saturating_add(m.extra) {
+        (narrow, m.narrow, 0)
+    } else {
+        (wide, m.wide, m.extra)
+    };
+    let d = mul_shr(MRAD, inv, 28).saturating_mul(sign);
+    cols.iter().fold(Row::new(r, Loss::Square(extra)), |row, &k| row.with(k, d))
+}
