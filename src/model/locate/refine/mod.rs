@@ -29,6 +29,8 @@
 
 mod rows;
 mod solve;
+#[cfg(test)]
+mod tests;
 
 use crate::config::locate::{BLOCKED_TURN_DEG, TURN_MRAD_S};
 use crate::config::refine as cfg;

@@ -124,7 +124,7 @@ impl Normal {
 /// first `n` rows and columns) in place: `m` becomes its Cholesky factor
 /// `L` (lower), `b` the solution (in `b`'s scale). `None` when a pivot is
 /// not positive.
-fn cholesky_solve(
+pub(super) fn cholesky_solve(
     m: &mut [[i64; MAX_PARAMS]; MAX_PARAMS],
     b: &mut [i64; MAX_PARAMS],
     n: usize,

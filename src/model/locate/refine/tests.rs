@@ -1,0 +1,153 @@
+//! The refinement on surveys whose readings the model explains exactly
+//! (the arena model's own ranges: `measurement::expected_lidar`), and on
+//! ones it cannot explain. The realistic simulator's figures, beside the
+//! f64 reference's, are `tests/localization/locate.rs`'s.
+
+#![allow(clippy::restriction)] // test code: a panic fails the test
+
+use super::solve::cholesky_solve;
+use super::*;
+use crate::math::Length;
+use crate::model::locate::locate;
+use crate::model::measurement::{expected_lidar, LidarId};
+use std::vec::Vec;
+
+const ARENA: Arena = Arena::DEFAULT;
+
+/// The body's reference point at heading `deg` about the pivot (mm) at a
+/// lever of `lever` mm.
+fn pose_at(pivot: (f64, f64), lever: f64, deg: f64) -> Pose {
+    let t = deg.to_radians();
+    let (x, y) = (pivot.0 + lever * t.cos(), pivot.1 + lever * t.sin());
+    Pose::new(Coord::from_mm_f64(x), Coord::from_mm_f64(y), Angle::from_degrees_f64(deg))
+}
+
+/// A survey of `headings` (degrees) about `pivot`, the compass off by
+/// `bias` degrees, each turn 33 ticks with a reading pair every third;
+/// `spoil` changes each turn reading (mm).
+fn survey(pivot: (f64, f64), lever: f64, headings: &[f64], bias: f64, spoil: f64) -> (Vec<Readings>, Vec<Turn>) {
+    let read = |p: &Pose, id| expected_lidar(&ARENA, p, id);
+    let views: Vec<Readings> = headings
+        .iter()
+        .map(|&h| {
+            let p = pose_at(pivot, lever, h);
+            Readings {
+                heading: Angle::from_degrees_f64(h + bias),
+                front: read(&p, LidarId::Front),
+                right: read(&p, LidarId::Right),
+            }
+        })
+        .collect();
+    let turns = headings
+        .windows(2)
+        .map(|w| {
+            let mut t = Turn::new(w[1] > w[0], 1);
+            for tick in (3..33u16).step_by(3) {
+                let h = w[0] + (w[1] - w[0]) * f64::from(tick) / 33.0;
+                let p = pose_at(pivot, lever, h);
+                for id in [LidarId::Front, LidarId::Right] {
+                    if let Some(d) = read(&p, id) {
+                        t.push(id, tick, Length::from_mm_f64(d.to_mm_f64() + spoil));
+                    }
+                }
+            }
+            t.end(33);
+            t
+        })
+        .collect();
+    (views, turns)
+}
+
+fn refine_all(fix: &Fix, views: &[Readings], turns: &[Turn]) -> (Refined, u32) {
+    let mut r = Refine::new(fix, views, turns);
+    for passes in 1..20_000 {
+        if let Some(done) = r.step(&ARENA, views, turns) {
+            return (done.expect("a refined pose"), passes);
+        }
+    }
+    panic!("the refinement did not end");
+}
+
+fn off(got: &Pose, want: &Pose) -> (f64, f64) {
+    let d = (got.x.to_mm_f64() - want.x.to_mm_f64()).hypot(got.y.to_mm_f64() - want.y.to_mm_f64());
+    (d, f64::from(got.theta.diff(want.theta)) * 360.0 / 4_294_967_296.0)
+}
+
+#[test]
+fn a_survey_the_model_explains_refines_to_its_pose() {
+    // the hard world's lever (60 mm behind the axle), the compass 4
+    // degrees off at every view: the search's heading is 4 degrees out
+    let (pivot, lever) = ((380.0, 240.0), 116.0);
+    let headings = [10.0, 55.0, 100.0, 145.0];
+    let (views, turns) = survey(pivot, lever, &headings, 4.0, 0.0);
+    let fix = locate(&ARENA, &views).expect("the search finds a place");
+    let truth = pose_at(pivot, lever, 145.0);
+    let (refined, passes) = refine_all(&fix, &views, &turns);
+    let (d, deg) = off(&refined.pose, &truth);
+    std::println!(
+        "refined {d:.1} mm and {deg:.2} degrees off in {passes} passes (the search {:?})",
+        off(&fix.pose, &truth)
+    );
+    assert!(d < 3.0 && deg.abs() < 0.5, "{d} mm, {deg} degrees");
+    assert!(refined.vouched, "{refined:?}");
+}
+
+#[test]
+fn readings_no_pose_explains_are_not_vouched_for() {
+    // every turn's reading 60 mm long (something else than the walls, or
+    // a lidar's model far off): the fit cannot explain them
+    let (pivot, lever) = ((380.0, 240.0), 116.0);
+    let (views, turns) = survey(pivot, lever, &[10.0, 55.0, 100.0, 145.0], 0.0, 60.0);
+    let fix = locate(&ARENA, &views).expect("the views alone fit");
+    let (refined, _) = refine_all(&fix, &views, &turns);
+    assert!(!refined.vouched, "{refined:?}");
+    assert!(refined.per_reading > FIT_LIMIT);
+}
+
+#[test]
+fn compass_rates_take_each_ways_median_and_skip_blocked_turns() {
+    let view = |deg: f64| Readings { heading: Angle::from_degrees_f64(deg), front: None, right: None };
+    let views = [view(0.0), view(45.0), view(95.0), view(96.0), view(50.0)];
+    let turn = |cw: bool, ticks: u16| {
+        let mut t = Turn::new(cw, 1);
+        t.end(ticks);
+        t
+    };
+    let turns = [turn(true, 30), turn(true, 40), turn(true, 30), turn(false, 23)];
+    let (cw, ccw) = compass_rates(&views, &turns);
+    let lsb = |deg: f64, ticks: f64| Angle::from_degrees_f64(deg).0 as f64 / ticks;
+    // 45 / 30 and 50 / 40: the median of two is the upper; 1 degree is blocked
+    assert!((cw as f64 - lsb(45.0, 30.0)).abs() < 2.0, "{cw}");
+    assert!((ccw as f64 - lsb(46.0, 23.0)).abs() < 2.0, "{ccw}");
+}
+
+#[test]
+fn cholesky_solves_a_positive_definite_system() {
+    let one = 1i64 << 24;
+    let mut m = [[0i64; MAX_PARAMS]; MAX_PARAMS];
+    // [[4, 2, 0], [2, 3, 1], [0, 1, 2]] y = [2, 1, -1] (Q24; b Q12)
+    let a = [[4, 2, 0], [2, 3, 1], [0, 1, 2]];
+    for (row, src) in m.iter_mut().zip(a) {
+        for (v, s) in row.iter_mut().zip(src) {
+            *v = s * one;
+        }
+    }
+    let mut b = [0i64; MAX_PARAMS];
+    b[..3].copy_from_slice(&[2 << 12, 1 << 12, -(1 << 12)]);
+    let y = cholesky_solve(&mut m, &mut b, 3).expect("solved");
+    // exact: y = (1/3, 1/3, -2/3)
+    for (got, want) in y.iter().zip([1.0 / 3.0, 1.0 / 3.0, -2.0 / 3.0]) {
+        assert!((*got as f64 / 4096.0 - want).abs() < 1e-3, "{y:?}");
+    }
+    // not positive definite
+    let mut m = [[0i64; MAX_PARAMS]; MAX_PARAMS];
+    m[0][0] = -one;
+    assert!(cholesky_solve(&mut m, &mut [0; MAX_PARAMS], 1).is_none());
+}
+
+#[test]
+fn the_config_logarithm_is_the_logarithm() {
+    for x in [0.5, 1.0, 2.0, 9.333, 11.2, 50.0] {
+        assert!((crate::math::ln_f64(x) - x.ln()).abs() < 1e-9, "{x}");
+    }
+}
