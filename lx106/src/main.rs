@@ -10,6 +10,7 @@
 
 mod bench;
 mod bench_locate;
+mod bench_refine;
 mod bench_loop;
 mod bench_trig;
 mod float;
@@ -29,6 +30,7 @@ pub extern "C" fn rust_main() -> i32 {
     let (p3, f3) = bench_loop::run();
     bench_trig::run();
     bench_locate::run();
+    bench_refine::run();
     let (p2, f2) = (p2 + p3, f2 + f3);
     #[cfg(feature = "demo-fail")]
     let (p2, f2) = {

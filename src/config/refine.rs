@@ -60,3 +60,9 @@ pub const START_AXIS_SHARES: [bool; 2] = [false, true];
 /// step (the damping raised after each failed one).
 pub const MAX_ITERATIONS: u8 = 30;
 pub const MAX_TRIES: u8 = 6;
+/// Rows of the fit (a reading, a prior) a loop tick sums: each reading a
+/// `Beam` and its noise (about 7,000 lx106 instructions with its
+/// derivatives), so 24 take about a fifth of the 10 ms tick, and the
+/// step's solve at a pass's end the rest of a third (`lx106/BENCHMARKS.md`,
+/// "Refining the fix").
+pub const ROWS_PER_STEP: usize = 24;

@@ -257,6 +257,7 @@ impl Beam {
     /// perfect reading; positive when the reading is longer than expected.
     /// The cone's cosine times the ordinary innovation `z - expected`, with
     /// no division.
+    #[inline(always)]
     pub fn normal_miss(&self, z: Length) -> Length {
         // 0 < cone_normal <= 2^30: the product is below |z + setback|
         Length(mul_q30_unsat(z.saturating_add(self.setback).0, self.cone_normal)).saturating_sub(self.to_wall)
@@ -266,6 +267,7 @@ impl Beam {
     /// beam's axis is, along the wall's normal: `(z + setback)(cos_cone -
     /// cos_axis)`, at least 0 (0 met square on). Where in this spot the sensor's range comes
     /// from is learned (`model::estimator`'s spot.rs).
+    #[inline(always)]
     pub fn spot_spread(&self, z: Length) -> Length {
         // 0 <= cone_normal - normal <= 2^30: the product is below |z + setback|
         Length(mul_q30_unsat(z.saturating_add(self.setback).0, self.cone_normal.saturating_sub(self.normal).max(0)))
@@ -276,6 +278,7 @@ impl Beam {
     /// (Q16): `(z + setback)` times the cone's sine with the sign of the
     /// incidence's change (0 inside the cone), plus the lidar position's
     /// share (see the module docs).
+    #[inline(always)]
     pub fn heading_lever(&self, z: Length) -> Length {
         let range = z.saturating_add(self.setback).0;
         let turn = if self.cone_tangent == 0 {
@@ -304,6 +307,7 @@ impl Beam {
     /// are less than `margin` (at most [`CORNER_MARGIN_MAX`]) apart in
     /// range. Division-free:
     /// `|A_x n_y - A_y n_x| < margin n_x n_y` with the cone cosines `n`.
+    #[inline(always)]
     pub fn near_corner(&self, margin: Length) -> bool {
         let Corner::Cross { cross, other_cross, other_normal } = self.corner else {
             return false;

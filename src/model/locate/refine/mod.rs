@@ -40,8 +40,8 @@ use crate::model::locate::turns::Turn;
 use crate::model::locate::{Fix, Readings, MAX_CLUSTERS, MAX_VIEWS};
 use crate::model::measurement::Arena;
 use crate::model::state::Pose;
-use rows::{Model, Params, BIAS, CCW, CW, HEADING, LEVER, MAX_PARAMS, ONE_SIGMA, PX, PY};
-use solve::{Normal, DAMPING_MAX, DAMPING_MIN};
+use rows::{Loss, Model, Params, BIAS, CCW, CW, HEADING, LEVER, MAX_PARAMS, ONE_SIGMA, PX, PY};
+use solve::{Sums, DAMPING_MAX, DAMPING_MIN};
 
 /// Where in its spot a range is read from, held through a start.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
@@ -112,14 +112,31 @@ impl End {
     }
 }
 
+/// What a start's fit is summing over the readings.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+enum Stage {
+    /// The start's cost.
+    Start,
+    /// The normal equations at the parameters.
+    Normal,
+    /// The cost of the step tried.
+    Trial,
+}
+
 /// One start's fit under way.
 #[derive(Clone, Copy, Debug)]
 struct Fit {
     p: Params,
     cost: i64,
     readings: u32,
-    /// A step to try, from the last normal equations.
-    trial: Option<Params>,
+    /// The step tried (from `sums`, at `p`).
+    trial: Params,
+    stage: Stage,
+    /// The pass under way: its next row, and its sums so far.
+    row: u16,
+    pass_cost: i64,
+    pass_readings: u32,
+    sums: Sums,
     damping: i8,
     iterations: u8,
     tries: u8,
@@ -170,9 +187,10 @@ impl Refine {
         }
     }
 
-    /// One pass over the readings (a `Beam` each): `None` while the fit
-    /// goes on, then the refined pose (`None` inside when there were no
-    /// views). `views` and `turns` must be the ones [`Refine::new`] had.
+    /// The fit's next [`cfg::ROWS_PER_STEP`] rows (a `Beam` for each
+    /// reading): `None` while the fit goes on, then the refined pose
+    /// (`None` inside when there were no views). `views` and `turns` must
+    /// be the ones [`Refine::new`] had.
     pub fn step(&mut self, arena: &Arena, views: &[Readings], turns: &[Turn]) -> Option<Option<Refined>> {
         let views = views.get(..MAX_VIEWS).unwrap_or(views);
         let starts = self.places_count.saturating_mul(STARTS);
@@ -187,32 +205,11 @@ impl Refine {
         let (nx, ny, inv) = self.places.get(place).copied().unwrap_or((0, 0, NEAR_INV));
         let model = Model { arena, views, turns, share, near: (nx, ny, inv) };
         let turned = START_TURNS.get(heading_at).copied().unwrap_or(0);
-        let Some(mut fit) = self.fit else {
-            let p = self.start_params(views, (nx, ny), turned, lever_mm);
-            let (cost, readings) = solve::total(&model, &p);
-            self.fit = Some(Fit { p, cost, readings, trial: None, damping: -10, iterations: 0, tries: 0 });
-            return None;
+        let mut fit = match self.fit {
+            Some(fit) => fit,
+            None => Fit::new(self.start_params(views, (nx, ny), turned, lever_mm)),
         };
-        let mut ended = false;
-        match fit.trial.take() {
-            None => match Normal::at(&model, &fit.p).step(&fit.p, fit.damping) {
-                Some(q) => fit.trial = Some(q),
-                None => ended = fit.failed(),
-            },
-            Some(q) => {
-                let (cost, readings) = solve::total(&model, &q);
-                if cost < fit.cost {
-                    let gain = fit.cost.saturating_sub(cost);
-                    (fit.p, fit.cost, fit.readings, fit.tries) = (q, cost, readings, 0);
-                    fit.damping = fit.damping.saturating_sub(2).max(DAMPING_MIN);
-                    fit.iterations = fit.iterations.saturating_add(1);
-                    ended = fit.iterations >= cfg::MAX_ITERATIONS || gain < CONVERGED;
-                } else {
-                    ended = fit.failed();
-                }
-            }
-        }
-        if ended {
+        if fit.pass(&model) && fit.next(model.params()) {
             let margin = if turned == 0 { 0 } else { AWAY_MARGIN };
             self.keep(fit.end(views.len(), margin));
             self.fit = None;
@@ -299,6 +296,88 @@ const START_TURNS: [i32; cfg::START_HEADINGS_DEG.len()] = {
 };
 
 impl Fit {
+    fn new(p: Params) -> Fit {
+        Fit {
+            p,
+            cost: i64::MAX,
+            readings: 0,
+            trial: p,
+            stage: Stage::Start,
+            row: 0,
+            pass_cost: 0,
+            pass_readings: 0,
+            sums: Sums::ZERO,
+            damping: -10,
+            iterations: 0,
+            tries: 0,
+        }
+    }
+
+    /// The pass's next rows: true when it is done.
+    fn pass(&mut self, model: &Model) -> bool {
+        let at = if self.stage == Stage::Trial { self.trial } else { self.p };
+        let normal = self.stage == Stage::Normal;
+        let (mut cost, mut readings, mut sums) = (self.pass_cost, self.pass_readings, self.sums);
+        let done = model.rows(&at, normal, usize::from(self.row), cfg::ROWS_PER_STEP, |row| {
+            if normal {
+                sums.add(row);
+            } else {
+                cost = cost.saturating_add(solve::cost(row));
+                readings = readings.saturating_add(u32::from(row.loss == Loss::Robust));
+            }
+        });
+        (self.pass_cost, self.pass_readings, self.sums) = (cost, readings, sums);
+        self.row = self.row.saturating_add(cfg::ROWS_PER_STEP as u16);
+        done
+    }
+
+    /// A pass is done: the next one. True when the start has ended.
+    fn next(&mut self, params: usize) -> bool {
+        let (cost, readings) = (self.pass_cost, self.pass_readings);
+        (self.row, self.pass_cost, self.pass_readings) = (0, 0, 0);
+        match self.stage {
+            Stage::Start => {
+                (self.cost, self.readings) = (cost, readings);
+                self.begin_normal();
+                false
+            }
+            Stage::Normal => self.try_step(params),
+            Stage::Trial if cost < self.cost => {
+                let gain = self.cost.saturating_sub(cost);
+                (self.p, self.cost, self.readings, self.tries) = (self.trial, cost, readings, 0);
+                self.damping = self.damping.saturating_sub(2).max(DAMPING_MIN);
+                self.iterations = self.iterations.saturating_add(1);
+                if self.iterations >= cfg::MAX_ITERATIONS || gain < CONVERGED {
+                    return true;
+                }
+                self.begin_normal();
+                false
+            }
+            // the same normal equations, damped more
+            Stage::Trial => self.failed() || self.try_step(params),
+        }
+    }
+
+    fn begin_normal(&mut self) {
+        self.sums = Sums::ZERO;
+        self.stage = Stage::Normal;
+    }
+
+    /// A step from the normal equations: its cost's pass next. True when
+    /// no step can be tried any more.
+    fn try_step(&mut self, params: usize) -> bool {
+        loop {
+            if let Some(q) = self.sums.step(&self.p, params, self.damping) {
+                self.trial = q;
+                self.stage = Stage::Trial;
+                return false;
+            }
+            if self.failed() {
+                return true;
+            }
+        }
+    }
+
     /// A failed try: more damping, or the start's end.
     fn failed(&mut self) -> bool {
         self.tries = self.tries.saturating_add(1);

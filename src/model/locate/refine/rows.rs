@@ -20,7 +20,7 @@
 use super::Share;
 use crate::config::estimator as est;
 use crate::config::refine as cfg;
-use crate::math::{div_i64, isqrt64, sin_cos, Angle, Coord, Length};
+use crate::math::{div_i64, isqrt64, mul_wide, sin_cos, Angle, Coord, Length};
 use crate::model::locate::turns::Turn;
 use crate::model::locate::{Readings, MAX_VIEWS};
 use crate::model::measurement::{Arena, Beam, LidarId, Wall};
@@ -129,33 +129,42 @@ pub enum Loss {
 /// the parameters they are not zero for.
 #[derive(Clone, Copy, Debug)]
 pub struct Row {
-    pub r: i64,
-    pub cols: [(usize, i64); 5],
-    pub len: usize,
+    pub r: i32,
+    cols: [(u8, i32); 5],
+    len: u8,
     pub loss: Loss,
 }
 
 impl Row {
     fn new(r: i64, loss: Loss) -> Row {
-        Row { r: r.clamp(-R_MAX, R_MAX), cols: [(0, 0); 5], len: 0, loss }
+        Row { r: clamp(r), cols: [(0, 0); 5], len: 0, loss }
     }
 
     fn with(mut self, k: usize, d: i64) -> Row {
-        if let Some(slot) = self.cols.get_mut(self.len) {
-            *slot = (k, d.clamp(-R_MAX, R_MAX));
+        if let Some(slot) = self.cols.get_mut(usize::from(self.len)) {
+            *slot = (k as u8, clamp(d));
             self.len = self.len.saturating_add(1);
         }
         self
     }
 
-    pub fn cols(&self) -> &[(usize, i64)] {
-        self.cols.get(..self.len).unwrap_or(&[])
+    /// Its derivatives: (parameter, Q12 sigmas a unit).
+    pub fn cols(&self) -> &[(u8, i32)] {
+        self.cols.get(..usize::from(self.len)).unwrap_or(&[])
     }
 }
 
-/// `a b >> s`, saturated.
+/// Within [`R_MAX`], as an `i32`.
+fn clamp(v: i64) -> i32 {
+    v.clamp(-R_MAX, R_MAX) as i32
+}
+
+/// `a b >> s` for factors within `i32` (a residual's or a derivative's
+/// scaling: `mul_wide`'s 25 lx106 instructions, where a saturating i64
+/// product is about 290; the pass over the readings is the fit's cost).
 fn mul_shr(a: i64, b: i64, s: u32) -> i64 {
-    a.saturating_mul(b) >> s
+    let fit = |v: i64| v.clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32;
+    mul_wide(fit(a), fit(b)) >> s
 }
 
 /// Where a reading's heading comes from: one view's, or a turn's two
@@ -183,10 +192,20 @@ impl Model<'_> {
         HEADING.saturating_add(self.views.len().min(MAX_VIEWS))
     }
 
-    /// Every row at `p`, in order: the views (lidars, compass), the turns
-    /// (the turn itself, its readings), then the priors; the derivatives
-    /// only when asked for (the cost needs none).
-    pub fn rows(&self, p: &Params, derivatives: bool, mut f: impl FnMut(&Row)) {
+    /// The rows at `p` from the `from`-th, `count` of them at most, in
+    /// order: the views (lidars, compass), the turns (the turn itself, its
+    /// readings), then the priors; the derivatives only when asked for
+    /// (the cost needs none). True when the last row was among them.
+    pub fn rows(&self, p: &Params, derivatives: bool, from: usize, count: usize, mut f: impl FnMut(&Row)) -> bool {
+        let end = from.saturating_add(count);
+        let mut index = 0usize;
+        // a row is made only when its index is in the slice
+        let mut emit = |make: &dyn Fn() -> Row| {
+            if index >= from && index < end {
+                f(&make());
+            }
+            index = index.saturating_add(1);
+        };
         let get = |k: usize| p.get(k).copied().unwrap_or(0);
         let views = self.views.get(..MAX_VIEWS).unwrap_or(self.views);
         for (i, v) in views.iter().enumerate() {
@@ -194,24 +213,28 @@ impl Model<'_> {
             let at = At { theta: get(k), from: (k, 1 << 16), to: (k, 0) };
             for (id, z) in [(LidarId::Front, v.front), (LidarId::Right, v.right)] {
                 if let Some(z) = z {
-                    f(&self.lidar(p, at, id, z, derivatives));
+                    emit(&|| self.lidar(p, at, id, z, derivatives));
                 }
             }
-            let predicted = get(k).saturating_add(get(BIAS));
-            let miss = i64::from(v.heading.diff(Angle(predicted as u32)));
-            f(&mixed(miss, VIEW_PRIOR, &[k, BIAS], -1));
+            emit(&|| {
+                let predicted = get(k).saturating_add(get(BIAS));
+                let miss = i64::from(v.heading.diff(Angle(predicted as u32)));
+                mixed(miss, VIEW_PRIOR, &[k, BIAS], -1)
+            });
         }
         for (j, t) in self.turns.iter().enumerate().take(views.len().saturating_sub(1)) {
             let (from, to) = (HEADING.saturating_add(j), HEADING.saturating_add(j).saturating_add(1));
             let (a, b) = (get(from), get(to));
             let ticks = i64::from(t.ticks);
             if ticks > 0 {
-                let (rate, way) = if t.clockwise { (get(CW), 1) } else { (get(CCW).saturating_neg(), -1) };
-                let miss = b.saturating_sub(a).saturating_sub(rate.saturating_mul(ticks));
-                let d = mul_shr(MRAD, TURN_INV, 28);
-                let dr = mul_shr(ticks.saturating_mul(RATE_UNIT), TURN_INV, 28).saturating_mul(-way);
-                let rate_col = if t.clockwise { CW } else { CCW };
-                f(&Row::new(mul_shr(miss, TURN_INV, 28), Loss::Robust).with(to, d).with(from, -d).with(rate_col, dr));
+                emit(&|| {
+                    let (rate, way) = if t.clockwise { (get(CW), 1) } else { (get(CCW).saturating_neg(), -1) };
+                    let miss = b.saturating_sub(a).saturating_sub(rate.saturating_mul(ticks));
+                    let d = mul_shr(MRAD, TURN_INV, 28);
+                    let dr = mul_shr(ticks.saturating_mul(RATE_UNIT), TURN_INV, 28).saturating_mul(-way);
+                    let rate_col = if t.clockwise { CW } else { CCW };
+                    Row::new(mul_shr(miss, TURN_INV, 28), Loss::Robust).with(to, d).with(from, -d).with(rate_col, dr)
+                });
             }
             for s in t.samples() {
                 let done = div_i64(i64::from(s.tick) << 16, ticks.max(1)).unwrap_or(0).clamp(0, 1 << 16);
@@ -219,32 +242,42 @@ impl Model<'_> {
                 let at = At { theta, from: (from, (1 << 16) - done), to: (to, done) };
                 for id in [LidarId::Front, LidarId::Right] {
                     if let Some(z) = s.distance(id) {
-                        f(&self.lidar(p, at, id, z, derivatives));
+                        emit(&|| self.lidar(p, at, id, z, derivatives));
                     }
                 }
             }
         }
-        let bias = i64::from(Angle(get(BIAS) as u32).diff(Angle::ZERO));
-        f(&mixed(bias, BIAS_PRIOR, &[BIAS], 1));
-        let lever = get(LEVER).saturating_sub(LEVER_MEAN);
-        f(&Row::new(mul_shr(lever, LEVER_INV, 28), Loss::Square(0)).with(LEVER, mul_shr(MM, LEVER_INV, 28)));
+        emit(&|| {
+            let bias = i64::from(Angle(get(BIAS) as u32).diff(Angle::ZERO));
+            mixed(bias, BIAS_PRIOR, &[BIAS], 1)
+        });
+        emit(&|| {
+            let lever = get(LEVER).saturating_sub(LEVER_MEAN);
+            Row::new(mul_shr(lever, LEVER_INV, 28), Loss::Square(0)).with(LEVER, mul_shr(MM, LEVER_INV, 28))
+        });
         let last = HEADING.saturating_add(views.len().saturating_sub(1));
+        for on_x in [true, false] {
+            emit(&|| self.near(p, last, on_x));
+        }
+        index <= end
+    }
+
+    /// The prior that the last view stays near the search's place: along
+    /// x, or along y.
+    fn near(&self, p: &Params, last: usize, on_x: bool) -> Row {
+        let get = |k: usize| p.get(k).copied().unwrap_or(0);
         let (s, c) = sin_cos(Angle(get(last) as u32));
+        let (s, c) = (i64::from(s), i64::from(c));
         let d = get(LEVER);
         let (nx, ny, inv) = self.near;
-        let x = get(PX).saturating_add(mul_shr(d, i64::from(c), 30));
-        let y = get(PY).saturating_add(mul_shr(d, i64::from(s), 30));
         let per = |v: i64| mul_shr(v, inv, 28);
-        let turn_x = mul_shr(mul_shr(d, -i64::from(s), 30), PER_MRAD, 30);
-        let turn_y = mul_shr(mul_shr(d, i64::from(c), 30), PER_MRAD, 30);
-        f(&Row::new(per(x.saturating_sub(nx)), Loss::Square(0))
-            .with(PX, per(MM))
-            .with(LEVER, per(i64::from(c) >> 14))
-            .with(last, per(turn_x)));
-        f(&Row::new(per(y.saturating_sub(ny)), Loss::Square(0))
-            .with(PY, per(MM))
-            .with(LEVER, per(i64::from(s) >> 14))
-            .with(last, per(turn_y)));
+        let (start, toward, swing, at, col) =
+            if on_x { (get(PX), c, mul_shr(d, -s, 30), nx, PX) } else { (get(PY), s, mul_shr(d, c, 30), ny, PY) };
+        let place = start.saturating_add(mul_shr(d, toward, 30));
+        Row::new(per(place.saturating_sub(at)), Loss::Square(0))
+            .with(col, per(MM))
+            .with(LEVER, per(toward >> 14))
+            .with(last, per(mul_shr(swing, PER_MRAD, 30)))
     }
 
     /// A lidar's reading `z` with the body at heading `at`.
@@ -268,12 +301,13 @@ impl Model<'_> {
         // d(nu)/d(reference point) is +1 along the wall's normal for the
         // north and east walls, -1 for the others; d(nu)/d(heading) is
         // minus that times the beam's lever (`Beam::heading_lever`)
-        let sign: i64 = if matches!(beam.wall, Wall::North | Wall::East) { 1 } else { -1 };
+        let north_or_east = matches!(beam.wall, Wall::North | Wall::East);
+        let signed = |v: i64| if north_or_east { v } else { v.saturating_neg() };
         let on_x = beam.wall.is_x_wall();
         let (toward, swing) = if on_x { (c, mul_shr(d, -s, 30)) } else { (s, mul_shr(d, c, 30)) };
         let turning = match self.share {
             // the cone's nearest point: the beam's own lever
-            Share::Nearest => i64::from(beam.heading_lever(z).0).saturating_mul(-sign),
+            Share::Nearest => signed(i64::from(beam.heading_lever(z).0)).saturating_neg(),
             // the axis's: its incidence changes too, by a difference
             // (one more beam, for the derivatives only)
             Share::Axis if derivatives => {
@@ -281,18 +315,18 @@ impl Model<'_> {
                 let beam = Beam::new(self.arena, &turned, &id.mount());
                 let spread = i64::from(beam.spot_spread(z).0);
                 let turned_nu = i64::from(beam.normal_miss(z).0).saturating_sub(spread);
-                turned_nu.saturating_sub(nu).saturating_mul(PER_TURN_STEP)
+                mul_shr(turned_nu.saturating_sub(nu), PER_TURN_STEP, 0)
             }
             Share::Axis => 0,
         };
-        let per_rad = swing.saturating_mul(sign).saturating_add(turning);
+        let per_rad = signed(swing).saturating_add(turning);
         let per_mrad = mul_shr(per_rad, PER_MRAD, 30);
         let inv = self.inverse_sigma(&beam);
         let per = |v: i64| mul_shr(v, inv, 28);
-        let (px, py) = if on_x { (sign.saturating_mul(MM), 0) } else { (0, sign.saturating_mul(MM)) };
+        let (px, py) = if on_x { (signed(MM), 0) } else { (0, signed(MM)) };
         let dt = per(per_mrad);
         let row = Row::new(per(nu), Loss::Robust).with(PX, per(px)).with(PY, per(py));
-        let row = row.with(LEVER, per(sign.saturating_mul(toward) >> 14));
+        let row = row.with(LEVER, per(signed(toward) >> 14));
         let row = row.with(at.from.0, mul_shr(dt, at.from.1, 16));
         if at.to.1 != 0 {
             row.with(at.to.0, mul_shr(dt, at.to.1, 16))

@@ -123,8 +123,8 @@ fn compass_rates_take_each_ways_median_and_skip_blocked_turns() {
 
 #[test]
 fn cholesky_solves_a_positive_definite_system() {
-    let one = 1i64 << 24;
-    let mut m = [[0i64; MAX_PARAMS]; MAX_PARAMS];
+    let one = 1i32 << 24;
+    let mut m = [[0i32; MAX_PARAMS]; MAX_PARAMS];
     // [[4, 2, 0], [2, 3, 1], [0, 1, 2]] y = [2, 1, -1] (Q24; b Q12)
     let a = [[4, 2, 0], [2, 3, 1], [0, 1, 2]];
     for (row, src) in m.iter_mut().zip(a) {
@@ -132,7 +132,7 @@ fn cholesky_solves_a_positive_definite_system() {
             *v = s * one;
         }
     }
-    let mut b = [0i64; MAX_PARAMS];
+    let mut b = [0i32; MAX_PARAMS];
     b[..3].copy_from_slice(&[2 << 12, 1 << 12, -(1 << 12)]);
     let y = cholesky_solve(&mut m, &mut b, 3).expect("solved");
     // exact: y = (1/3, 1/3, -2/3)
@@ -140,7 +140,7 @@ fn cholesky_solves_a_positive_definite_system() {
         assert!((*got as f64 / 4096.0 - want).abs() < 1e-3, "{y:?}");
     }
     // not positive definite
-    let mut m = [[0i64; MAX_PARAMS]; MAX_PARAMS];
+    let mut m = [[0i32; MAX_PARAMS]; MAX_PARAMS];
     m[0][0] = -one;
     assert!(cholesky_solve(&mut m, &mut [0; MAX_PARAMS], 1).is_none());
 }
@@ -150,4 +150,15 @@ fn the_config_logarithm_is_the_logarithm() {
     for x in [0.5, 1.0, 2.0, 9.333, 11.2, 50.0] {
         assert!((crate::math::ln_f64(x) - x.ln()).abs() < 1e-9, "{x}");
     }
+}
+
+#[test]
+fn sizes() {
+    std::println!(
+        "Search {} Refine {} Fit {} Turn {}",
+        core::mem::size_of::<crate::model::locate::Search>(),
+        core::mem::size_of::<Refine>(),
+        core::mem::size_of::<Fit>(),
+        core::mem::size_of::<Turn>()
+    );
 }
