@@ -386,3 +386,32 @@ fn a_turn_whose_view_fails_is_not_among_the_turns() {
     assert_eq!(end, Action::Done(Err(Failure::NoHeading)));
     assert_eq!((s.views().len(), s.turns().len()), (1, 0));
 }
+
+/// Three views and two turns, one of them back over the swept ground:
+/// the views, the turns and the room log after them.
+fn three_views(s: &mut Survey) -> (std::vec::Vec<Readings>, std::vec::Vec<Turn>, RoomLog) {
+    assert_eq!(view(s, 0, Some(aim()), Some(300)), Action::Stand);
+    turn_reading(s, true, 1);
+    settle_reading(s);
+    assert_eq!(view(s, 45, Some(60), Some(300)), Action::Stand);
+    turn_reading(s, false, 2);
+    settle_reading(s);
+    assert_eq!(view(s, 315, Some(aim()), Some(300)), Action::Stand);
+    (s.views().to_vec(), s.turns().to_vec(), s.room())
+}
+
+#[test]
+fn a_restarted_survey_goes_as_a_new_one() {
+    let mut new = Survey::new();
+    let fresh = three_views(&mut new);
+    assert_eq!(fresh.1.len(), 2);
+    // restarted after its views, and in the middle of a turn
+    let mut s = Survey::new();
+    three_views(&mut s);
+    for _ in 0..5 {
+        assert!(matches!(s.tick(&ARENA), Action::Turn { .. }));
+    }
+    s.restart();
+    assert!(s.views().is_empty() && s.turns().is_empty());
+    assert_eq!(three_views(&mut s), fresh);
+}
