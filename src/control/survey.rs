@@ -38,12 +38,15 @@
 //! The survey owns no hardware and no clock: the loop hands it the
 //! readings ([`Survey::lidar`], [`Survey::heading`]) and calls
 //! [`Survey::tick`] once per tick, which says whether to stand or turn,
-//! or gives the answer.
+//! or gives the answer. It keeps the lidars' readings taken while turning
+//! between views too ([`Survey::turns`], issue #29), for refining the
+//! search's fix.
 
 use crate::config;
 use crate::config::timing::LOOP_HZ;
 use crate::control::goto::position_steerable;
 use crate::math::{Angle, Length};
+use crate::model::locate::turns::Turn;
 use crate::model::locate::{Fix, LocateError, Readings, Search, MAX_VIEWS};
 use crate::model::measurement::{Arena, LidarId};
 
@@ -159,6 +162,10 @@ pub struct RoomLog {
 pub struct Survey {
     views: [Readings; MAX_VIEWS],
     count: usize,
+    /// The turns begun, turn `j` just after view `j` was kept (every view
+    /// but the first comes after one turn: the first after the drive
+    /// that makes room); [`Survey::turns`] shows those with a view after.
+    turns: heapless::Vec<Turn, { MAX_VIEWS - 1 }>,
     phase: Phase,
     /// Ticks spent in this phase.
     ticks: u32,
@@ -191,6 +198,11 @@ struct Sweep {
     steps: u8,
 }
 
+impl Sweep {
+    /// At the first view, nothing swept.
+    const START: Sweep = Sweep { at: 0, edges: [0, 0], edge_views: [0, 0], blocked: [false, false], steps: 1 };
+}
+
 impl Default for Survey {
     fn default() -> Self {
         Survey::new()
@@ -210,6 +222,7 @@ impl Survey {
         Survey {
             views: [Readings { heading: Angle::ZERO, front: None, right: None }; MAX_VIEWS],
             count: 0,
+            turns: heapless::Vec::new(),
             phase: Phase::View,
             ticks: 0,
             clockwise: true,
@@ -221,10 +234,33 @@ impl Survey {
                 headings: 0,
             },
             positioned: false,
-            sweep: Sweep { at: 0, edges: [0, 0], edge_views: [0, 0], blocked: [false, false], steps: 1 },
+            sweep: Sweep::START,
             room: RoomLog { moved_mm: 0, reversed: 0, squeezed: 0, cut_short: false },
             share: 0,
         }
+    }
+
+    /// Starts the procedure again, as [`Survey::new`] with the spot share
+    /// kept. In place, for the robot's stack, which holds the controller:
+    /// a survey assigned anew is built beside the old one (1.3 kB), and
+    /// with it the deepest call (the firmware's run, the tick, end_locate,
+    /// a `goto` that waited locating again) reached 14.9 kB below the
+    /// stack's top, past the ROM's flash parameters 14.6 kB below it
+    /// (`flashchip`, 0x3FFFC714, eagle.rom.addr.v6.ld; frames from
+    /// `cargo fw-image`'s ELF); in place the deepest is 13.6 kB.
+    pub fn restart(&mut self) {
+        // every field named: a new one must be restarted too
+        let Survey { views: _, count, turns, phase, ticks, clockwise, view, positioned, sweep, room, share: _ } = self;
+        // (the views past `count` are not read)
+        *count = 0;
+        turns.clear();
+        *phase = Phase::View;
+        *ticks = 0;
+        *clockwise = true;
+        *view = ViewSums::default();
+        *positioned = false;
+        *sweep = Sweep::START;
+        *room = RoomLog::default();
     }
 
     /// What the survey did to keep off the walls so far.
@@ -237,16 +273,38 @@ impl Survey {
         self.views.get(..self.count).unwrap_or(&[])
     }
 
-    /// A lidar's distance (the lidar model's output); kept while a view is
-    /// being taken, up to [`config::locate::LIDAR_READINGS`].
+    /// The turns between the views so far, with the lidars' readings
+    /// taken on them: turn `j` between views `j` and `j + 1`
+    /// ([`Survey::views`]), so one fewer than the views. A turn under way,
+    /// or one whose view never came (the view had no heading, the survey
+    /// was stopped), is not among them.
+    pub fn turns(&self) -> &[Turn] {
+        let between = self.count.saturating_sub(1);
+        self.turns.get(..between).unwrap_or(&self.turns)
+    }
+
+    /// A lidar's distance (the lidar model's output): kept while a view is
+    /// being taken, up to [`config::locate::LIDAR_READINGS`]; while
+    /// turning, by the turn, at the ticks the turn has run (handed in
+    /// before this tick's [`Survey::tick`]: the body has turned that many
+    /// ticks).
     pub fn lidar(&mut self, id: LidarId, d: Length) {
-        let distances = match id {
-            LidarId::Front => &mut self.view.front,
-            LidarId::Right => &mut self.view.right,
-        };
-        if matches!(self.phase, Phase::View) {
-            // a full view keeps its first readings
-            let _ = distances.push(d);
+        match self.phase {
+            Phase::View => {
+                let distances = match id {
+                    LidarId::Front => &mut self.view.front,
+                    LidarId::Right => &mut self.view.right,
+                };
+                // a full view keeps its first readings
+                let _ = distances.push(d);
+            }
+            Phase::Turn => {
+                let tick = u16::try_from(self.ticks).unwrap_or(u16::MAX);
+                if let Some(turn) = self.turns.last_mut() {
+                    turn.push(id, tick, d);
+                }
+            }
+            _ => {}
         }
     }
 
@@ -270,9 +328,7 @@ impl Survey {
             Phase::View => Action::Stand,
             Phase::Drive { ticks, .. } if self.ticks > *ticks => self.enter(Phase::Settle),
             Phase::Drive { forward, .. } => Action::Drive { forward: *forward },
-            Phase::Turn if self.ticks > TURN_TICKS.saturating_mul(u32::from(self.sweep.steps)) => {
-                self.enter(Phase::Settle)
-            }
+            Phase::Turn if self.ticks > TURN_TICKS.saturating_mul(u32::from(self.sweep.steps)) => self.turned(),
             Phase::Turn => Action::Turn { clockwise: self.clockwise },
             Phase::Settle if self.ticks > SETTLE_TICKS => {
                 self.view = ViewSums::default();
@@ -380,7 +436,22 @@ impl Survey {
         let [ccw, cw] = sw.edges;
         let steps = if clockwise { cw.saturating_sub(sw.at) } else { sw.at.saturating_sub(ccw) };
         self.sweep.steps = steps.saturating_add(1).unsigned_abs();
+        // turn `count - 1`, begun only after a view is kept, of fewer than
+        // `MAX_VIEWS` (`searched` ends the survey at that many): there is
+        // room for it
+        let _ = self.turns.push(Turn::new(clockwise, self.sweep.steps));
         self.enter(Phase::Turn)
+    }
+
+    /// A turn's ticks are over: its readings are kept, the body settles.
+    /// The tick this is called from turns no more, so the turn ran the
+    /// ticks before it ([`TURN_TICKS`] a step).
+    fn turned(&mut self) -> Action {
+        let ticks = u16::try_from(self.ticks.saturating_sub(1)).unwrap_or(u16::MAX);
+        if let Some(turn) = self.turns.last_mut() {
+            turn.end(ticks);
+        }
+        self.enter(Phase::Settle)
     }
 
     /// A search's answer: the end, or another view.

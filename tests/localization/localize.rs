@@ -193,3 +193,81 @@ fn a_goto_when_lost_locates_first_then_goes() {
     let t = robot.truth();
     assert!((t.x - 200.0).hypot(t.y - 300.0) <= 20.0, "ended at {t:?}");
 }
+
+/// The loop hands the survey the lidars' readings while it turns between
+/// views (issue #29): each turn of a power-up keeps, at the tick of the
+/// turn each came, every reading the loop took while the body turned (the
+/// same readings handed to a `Turn` directly, ended after the ticks the
+/// loop drove the turn), and the turns kept stay one fewer than the views.
+#[test]
+fn the_survey_keeps_the_readings_the_loop_takes_while_turning() {
+    use paperbot::config::locate::{TURN_DEG, TURN_MRAD_S};
+    use paperbot::config::timing::LOOP_HZ;
+    use paperbot::model::lidar::Range;
+    use paperbot::model::locate::turns::Turn;
+    use paperbot::model::measurement::LidarId;
+    use paperbot::model::Motion;
+    // a step's ticks: 45 degrees at 2.4 rad/s, 327 ms
+    let step_ticks = (TURN_DEG * 17_453 / TURN_MRAD_S) as u32 * LOOP_HZ / 1000;
+    assert_eq!(step_ticks, 32);
+
+    let mut robot = SimRobot::new(SimConfig::default());
+    robot.send("rate 0");
+    let sampled =
+        |r: &SimRobot| (r.controller().front_health().last_sample_us(), r.controller().right_health().last_sample_us());
+    let mut last = sampled(&robot);
+    // the turn under way as the loop drove it: its way, the ticks it has
+    // turned, the readings (lidar, tick of the turn, distance)
+    type Reading = (LidarId, u16, paperbot::math::Length);
+    let mut under_way: Option<(bool, u16, Vec<Reading>)> = None;
+    let mut expected: Vec<Turn> = vec![];
+    let mut most = 0;
+    for _ in 0..3_000 {
+        robot.tick();
+        if robot.take_output().iter().any(|l| l.starts_with("# locate")) {
+            break;
+        }
+        let c = robot.controller();
+        // this tick's new readings, handed to the survey before its tick
+        let now = sampled(&robot);
+        let fresh =
+            [(now.0 != last.0, LidarId::Front, c.last_front()), (now.1 != last.1, LidarId::Right, c.last_right())]
+                .into_iter()
+                .filter_map(|(new, id, s)| match s?.range {
+                    Range::Target(d) if new => Some((id, d)),
+                    _ => None,
+                });
+        last = now;
+        match (c.applied().motion, &mut under_way) {
+            // a tick the survey turned: the readings came at the ticks it
+            // had turned before
+            (Motion::Turn(rate), turn) => {
+                let (_, ticks, readings) = turn.get_or_insert((rate.to_mrad_s() > 0, 0, vec![]));
+                readings.extend(fresh.map(|(id, d)| (id, *ticks, d)));
+                *ticks += 1;
+            }
+            // the tick after the turn's last: its readings came at the end
+            (_, turn @ Some(_)) => {
+                let (clockwise, ticks, mut readings) = turn.take().unwrap();
+                readings.extend(fresh.map(|(id, d)| (id, ticks, d)));
+                let mut t = Turn::new(clockwise, (u32::from(ticks) / step_ticks) as u8);
+                for (id, tick, d) in readings {
+                    t.push(id, tick, d);
+                }
+                t.end(ticks);
+                expected.push(t);
+            }
+            _ => {}
+        }
+        let survey = c.survey();
+        assert_eq!(survey.turns().len() + 1, survey.views().len().max(1));
+        assert_eq!(survey.turns(), &expected[..survey.turns().len()]);
+        most = most.max(survey.turns().len());
+    }
+    assert!(most >= 3, "{most} turns kept");
+    // one step each, about a pair every 3.3 ticks (10 each here)
+    for t in &expected {
+        assert_eq!(t.ticks, 32);
+        assert!((8..=12).contains(&t.samples().len()), "{t:?}");
+    }
+}

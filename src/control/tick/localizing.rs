@@ -27,6 +27,13 @@ impl Localizing {
     pub const fn new() -> Localizing {
         Localizing { survey: Survey::new(), then: None }
     }
+
+    /// As new, in place (no second survey on the stack,
+    /// [`Survey::restart`]); what waited for the fix, handed back.
+    fn restart(&mut self) -> Option<Command> {
+        self.survey.restart();
+        self.then.take()
+    }
 }
 
 impl<H: Hardware> Controller<H> {
@@ -41,7 +48,7 @@ impl<H: Hardware> Controller<H> {
     /// Starts the procedure (`locate`, `reset`, and at power-up): the
     /// robot stands for its first view.
     pub(super) fn begin_locate(&mut self) {
-        self.localizing = Localizing::new();
+        self.localizing.restart();
         // the search reads the ranges as the estimator has learned to
         self.localizing.survey.set_spot_share(self.estimator.lidar_spot().0);
         self.mode = Mode::Locate { drive: self.model.stop(), timer: Timer::new(Some(config::locate::TIME_LIMIT_MS)) };
@@ -93,7 +100,7 @@ impl<H: Hardware> Controller<H> {
             self.mode = Mode::Idle;
         }
         let views = self.localizing.survey.views().len();
-        let then = core::mem::replace(&mut self.localizing, Localizing::new()).then;
+        let then = self.localizing.restart();
         match result {
             Ok(fix) => {
                 self.estimator.start_at(&fix);

@@ -9,7 +9,7 @@ use crate::math::Length;
 use crate::model::measurement::LidarId;
 
 /// Readings kept a turn, per lidar pair: a lidar's period is 3.3 ticks, so
-/// a turn of one [`cfg::TURN_DEG`] step (33 ticks) brings about ten;
+/// a turn of one [`cfg::TURN_DEG`] step (32 ticks) brings about ten;
 /// a longer turn keeps every second, third, ... pair ([`Turn::push`]).
 pub const SAMPLES: usize = cfg::TURN_SAMPLES;
 
