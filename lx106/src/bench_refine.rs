@@ -85,7 +85,7 @@ pub fn run() {
         println!("no fix: the search found nothing");
         return;
     };
-    let mut refine = Refine::new(&fix, &views, &turns);
+    let mut refine = Refine::new(fix, &views, &turns);
     let mut counts = [0u32; MAX_PASSES];
     let (mut passes, mut worst, mut total) = (0usize, 0u32, 0u64);
     let refined = loop {

@@ -31,7 +31,7 @@ mod sqrt;
 mod trig;
 
 pub use mul::{mul_hi, mul_hi_u, mul_hi_u32, mul_q30, mul_q30_unsat, mul_u31, mul_wide};
-pub use recip::reciprocal;
+pub use recip::{quotient, reciprocal};
 pub use shift::{normalize, shift};
 pub use sqrt::{isqrt, isqrt64};
 pub use trig::{atan2, sin_cos};

@@ -36,3 +36,33 @@ pub fn reciprocal(x: u32) -> u32 {
     // mul_hi's floors can leave y a few LSB above 1/x: step below it
     y.saturating_sub(16)
 }
+
+/// `num 2^shift / den`, for `den > 0` (`u64::MAX` for 0), from
+/// [`reciprocal`]: within a few parts in 2^27 below the exact quotient.
+/// About 150 lx106 instructions, where a 64-bit division is about 720
+/// (lx106/BENCHMARKS.md): for the localization's refinement, which
+/// divides a few times a reading. Saturates at `u64::MAX`.
+pub fn quotient(num: u32, den: u64, shift: u32) -> u64 {
+    if den == 0 {
+        return u64::MAX;
+    }
+    // den's top 32 bits, normalised: den = (d << sh) 2^(t - sh) for the
+    // reciprocal's x = d << sh in [2^31, 2^32)
+    let t = 32u32.saturating_sub(den.leading_zeros());
+    let (x, sh) = super::normalize((den >> t) as u32);
+    // num 2^shift / den = num (2^62 / x) 2^(shift + sh - t - 62); the
+    // product is below 2^32 2^31
+    let p = u64::from(num).wrapping_mul(u64::from(reciprocal(x)));
+    let up = shift.saturating_add(sh);
+    let down = t.saturating_add(62);
+    if up >= down {
+        let e = up.saturating_sub(down);
+        if e >= p.leading_zeros() {
+            u64::MAX
+        } else {
+            p << e
+        }
+    } else {
+        p.checked_shr(down.saturating_sub(up)).unwrap_or(0)
+    }
+}

@@ -368,19 +368,12 @@ fn procedure_refined(
         if let Some((tally, passes)) = robot.as_mut() {
             // the robot's refinement (fixed point), from the same readings
             let turns: Vec<Turn> = turns.iter().map(TurnSamples::to_turn).collect();
-            let better = fix.map(|mut f| {
-                let mut r = Refine::new(&f, &views, &turns);
-                let refined = loop {
+            let better = fix.map(|f| {
+                let mut r = Refine::new(f, &views, &turns);
+                while r.step(&Arena::DEFAULT, &views, &turns).is_none() {
                     **passes += 1;
-                    if let Some(done) = r.step(&Arena::DEFAULT, &views, &turns) {
-                        break done;
-                    }
-                };
-                if let Some(r) = refined {
-                    f.pose = r.pose;
-                    f.untrusted |= !r.vouched;
                 }
-                f
+                r.refined_fix()
             });
             tally.add(better, &truth);
         }

@@ -68,3 +68,23 @@ proptest! {
         prop_assert_eq!(Length::from_um(um).0 as i64, ((i64::from(um) << 16) / 1000).clamp(i64::from(i32::MIN), i64::from(i32::MAX)));
     }
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 20_000, ..ProptestConfig::default() })]
+
+    /// `quotient` (the refinement's division by a reciprocal) is the exact
+    /// `num 2^shift / den` (i128) within a few parts in 2^27, never above
+    /// it, and saturates where that does not fit.
+    #[test]
+    fn quotient_is_the_division_within_its_bound(num: u32, den in 1u64.., shift in 0u32..48) {
+        let exact = (u128::from(num) << shift) / u128::from(den);
+        let got = paperbot::math::quotient(num, den, shift);
+        if exact >= u128::from(u64::MAX) {
+            prop_assert_eq!(got, u64::MAX);
+        } else {
+            let got = u128::from(got);
+            prop_assert!(got <= exact + 1, "{} > {}", got, exact);
+            prop_assert!(exact - got.min(exact) <= exact / (1 << 26) + 2, "{} far below {}", got, exact);
+        }
+    }
+}

@@ -132,6 +132,25 @@ impl Fix {
         self.cluster_slots.get(..usize::from(self.count)).unwrap_or(&[])
     }
 
+    /// The fix refined to `pose` (`model::locate::refine`): the place
+    /// nearest it moved there, the heading its; uncertain unless the
+    /// refinement `vouched` for it (the search's own flags kept).
+    pub fn refine_to(&mut self, pose: Pose, vouched: bool) {
+        let count = usize::from(self.count);
+        let dist = |c: &Cluster| {
+            let (dx, dy) = (
+                c.x.to_length().to_mm() - pose.x.to_length().to_mm(),
+                c.y.to_length().to_mm() - pose.y.to_length().to_mm(),
+            );
+            i64::from(dx).saturating_mul(i64::from(dx)).saturating_add(i64::from(dy).saturating_mul(i64::from(dy)))
+        };
+        if let Some(nearest) = self.cluster_slots.get_mut(..count).and_then(|c| c.iter_mut().min_by_key(|c| dist(c))) {
+            (nearest.x, nearest.y) = (pose.x, pose.y);
+        }
+        self.pose = pose;
+        self.untrusted |= !vouched;
+    }
+
     /// A cluster's pose: its position at the fix's heading.
     pub fn pose_of(&self, c: &Cluster) -> Pose {
         Pose::new(c.x, c.y, self.pose.theta)

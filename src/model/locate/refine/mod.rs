@@ -71,7 +71,7 @@ const RIVAL_GAP: i64 = q24(cfg::RIVAL_GAP);
 const RIVAL_ANGLE: i32 = Angle::from_degrees_f64(cfg::RIVAL_DEG).0 as i32;
 /// A step that lowers the cost by less than this ends the start (Q24: a
 /// thousandth of a sigma squared).
-const CONVERGED: i64 = q24(0.001);
+const CONVERGED: i64 = q24(0.05);
 /// A turn the compass shows shorter than this was blocked: no rate from it.
 const BLOCKED: i64 = Angle::from_degrees_f64(BLOCKED_TURN_DEG as f64).0 as i64;
 const NEAR_INV: i64 = ((1u64 << 40) as f64 / (cfg::NEAR_SIGMA_MM * 65536.0)) as i64;
@@ -97,15 +97,15 @@ pub struct Refined {
 #[derive(Clone, Copy, Debug)]
 struct End {
     cost: i64,
-    per_reading: i64,
-    x_mm: i32,
-    y_mm: i32,
+    per_reading: i32,
+    x_mm: i16,
+    y_mm: i16,
     theta: Angle,
 }
 
 impl End {
     fn apart(&self, o: &End) -> bool {
-        let (dx, dy) = (i64::from(self.x_mm.saturating_sub(o.x_mm)), i64::from(self.y_mm.saturating_sub(o.y_mm)));
+        let (dx, dy) = (i64::from(self.x_mm) - i64::from(o.x_mm), i64::from(self.y_mm) - i64::from(o.y_mm));
         let far = i64::from(cfg::RIVAL_MM);
         dx.saturating_mul(dx).saturating_add(dy.saturating_mul(dy)) > far.saturating_mul(far)
             || self.theta.diff(o.theta).saturating_abs() > RIVAL_ANGLE
@@ -142,14 +142,12 @@ struct Fit {
     tries: u8,
 }
 
-/// The refinement, a pass over the readings at a time (see the module docs).
+/// The refinement, a slice of a pass over the readings at a time (see
+/// the module docs).
 #[derive(Clone, Copy, Debug)]
 pub struct Refine {
-    /// The search's places (Q16 mm) and `2^40 / sigma` of staying near each.
-    places: [(i64, i64, i64); MAX_CLUSTERS],
-    places_count: usize,
-    /// The fix's heading (the compass's, or the one the search fitted).
-    heading: Angle,
+    /// The search's fix: its places, refined.
+    fix: Fix,
     /// Each way's turn a tick from the compass, angle LSB (clockwise,
     /// counterclockwise).
     rates: (i64, i64),
@@ -164,27 +162,32 @@ pub struct Refine {
 impl Refine {
     /// The refinement of `fix`, found from `views` and `turns` (turn `j`
     /// between views `j` and `j + 1`).
-    pub fn new(fix: &Fix, views: &[Readings], turns: &[Turn]) -> Refine {
-        let mut places = [(0, 0, 0); MAX_CLUSTERS];
-        for (slot, c) in places.iter_mut().zip(fix.clusters()) {
-            let spread = c.sigma_x.0.max(c.sigma_y.0);
-            let inv = if spread > Length::from_mm_f64(cfg::NEAR_SIGMA_MM).0 {
-                div_i64(1 << 40, i64::from(spread)).unwrap_or(NEAR_INV)
-            } else {
-                NEAR_INV
-            };
-            *slot = (c.x.to_length().0.into(), c.y.to_length().0.into(), inv);
+    pub fn new(fix: Fix, views: &[Readings], turns: &[Turn]) -> Refine {
+        Refine { fix, rates: compass_rates(views, turns), start: 0, fit: None, ends: [None; KEPT], dropped: false }
+    }
+
+    /// Where to stay near: a place of the fix (Q16 mm) and `2^40 / sigma`.
+    fn place(&self, index: usize) -> (i64, i64, i64) {
+        let Some(c) = self.fix.clusters().get(index) else {
+            return (0, 0, NEAR_INV);
+        };
+        let spread = c.sigma_x.0.max(c.sigma_y.0);
+        let inv = if spread > Length::from_mm_f64(cfg::NEAR_SIGMA_MM).0 {
+            div_i64(1 << 40, i64::from(spread)).unwrap_or(NEAR_INV)
+        } else {
+            NEAR_INV
+        };
+        (c.x.to_length().0.into(), c.y.to_length().0.into(), inv)
+    }
+
+    /// The fix, refined: its pose the best fit's, and uncertain
+    /// ([`Fix::untrusted`]) unless the fit vouches for it.
+    pub fn refined_fix(&self) -> Fix {
+        let mut fix = self.fix;
+        if let Some(r) = self.result() {
+            fix.refine_to(r.pose, r.vouched);
         }
-        Refine {
-            places,
-            places_count: fix.clusters().len().min(MAX_CLUSTERS),
-            heading: fix.pose.theta,
-            rates: compass_rates(views, turns),
-            start: 0,
-            fit: None,
-            ends: [None; KEPT],
-            dropped: false,
-        }
+        fix
     }
 
     /// The fit's next [`cfg::ROWS_PER_STEP`] rows (a `Beam` for each
@@ -193,7 +196,7 @@ impl Refine {
     /// be the ones [`Refine::new`] had.
     pub fn step(&mut self, arena: &Arena, views: &[Readings], turns: &[Turn]) -> Option<Option<Refined>> {
         let views = views.get(..MAX_VIEWS).unwrap_or(views);
-        let starts = self.places_count.saturating_mul(STARTS);
+        let starts = self.fix.clusters().len().min(MAX_CLUSTERS).saturating_mul(STARTS);
         if self.start >= starts || views.is_empty() {
             return Some(self.result());
         }
@@ -202,7 +205,7 @@ impl Refine {
         let (heading_at, rest) = (choice / (levers * shares), choice % (levers * shares));
         let lever_mm = cfg::START_LEVERS_MM.get(rest / shares).copied().unwrap_or(0.0);
         let share = if cfg::START_AXIS_SHARES.get(rest % shares) == Some(&true) { Share::Axis } else { Share::Nearest };
-        let (nx, ny, inv) = self.places.get(place).copied().unwrap_or((0, 0, NEAR_INV));
+        let (nx, ny, inv) = self.place(place);
         let model = Model { arena, views, turns, share, near: (nx, ny, inv) };
         let turned = START_TURNS.get(heading_at).copied().unwrap_or(0);
         let mut fit = match self.fit {
@@ -226,7 +229,7 @@ impl Refine {
     fn start_params(&self, views: &[Readings], at: (i64, i64), turned: i32, lever_mm: f64) -> Params {
         let mut p: Params = [0; MAX_PARAMS];
         let last = views.len().saturating_sub(1);
-        let theta = i64::from(self.heading.0).saturating_add(i64::from(turned));
+        let theta = i64::from(self.fix.pose.theta.0).saturating_add(i64::from(turned));
         let lever = i64::from(Length::from_mm_f64(lever_mm).0);
         let (s, c) = sin_cos(Angle(theta as u32));
         p[PX] = at.0.saturating_sub(lever.saturating_mul(i64::from(c)) >> 30);
@@ -262,8 +265,8 @@ impl Refine {
         }
     }
 
-    /// The cheapest end, vouched for or not.
-    fn result(&self) -> Option<Refined> {
+    /// The cheapest end, vouched for or not (`None` before any start ended).
+    pub fn result(&self) -> Option<Refined> {
         let best = self.ends.iter().flatten().min_by_key(|e| e.cost)?;
         let apart = self.ends.iter().flatten().filter(|e| e.apart(best)).map(|e| e.cost).min();
         let dearest = self.ends.iter().flatten().map(|e| e.cost).max().unwrap_or(i64::MAX);
@@ -272,13 +275,13 @@ impl Refine {
             None if self.dropped => dearest,
             None => i64::MAX,
         };
-        let vouched = best.per_reading <= FIT_LIMIT && rival.saturating_sub(best.cost) >= RIVAL_GAP;
+        let vouched = i64::from(best.per_reading) <= FIT_LIMIT && rival.saturating_sub(best.cost) >= RIVAL_GAP;
         let pose = Pose::new(
-            Coord::from_length(Length::from_mm(best.x_mm)),
-            Coord::from_length(Length::from_mm(best.y_mm)),
+            Coord::from_length(Length::from_mm(best.x_mm.into())),
+            Coord::from_length(Length::from_mm(best.y_mm.into())),
             best.theta,
         );
-        Some(Refined { pose, vouched, per_reading: best.per_reading })
+        Some(Refined { pose, vouched, per_reading: best.per_reading.into() })
     }
 }
 
@@ -395,12 +398,18 @@ impl Fit {
         let cost = self.cost.saturating_add(margin);
         End {
             cost,
-            per_reading: div_i64(cost, i64::from(self.readings.max(1))).unwrap_or(i64::MAX),
-            x_mm: (x.clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32).saturating_add(1 << 15) >> 16,
-            y_mm: (y.clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32).saturating_add(1 << 15) >> 16,
+            per_reading: div_i64(cost, i64::from(self.readings.max(1))).unwrap_or(i64::MAX).min(i64::from(i32::MAX))
+                as i32,
+            x_mm: whole_mm(x),
+            y_mm: whole_mm(y),
             theta,
         }
     }
+}
+
+/// Q16 mm to whole mm, rounded, within `i16` (the box is a few hundred mm).
+fn whole_mm(v: i64) -> i16 {
+    (v.saturating_add(1 << 15) >> 16).clamp(i64::from(i16::MIN), i64::from(i16::MAX)) as i16
 }
 
 /// Each way's turn a tick from the compass (the median over the turns not

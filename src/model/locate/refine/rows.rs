@@ -20,7 +20,7 @@
 use super::Share;
 use crate::config::estimator as est;
 use crate::config::refine as cfg;
-use crate::math::{div_i64, isqrt64, mul_wide, sin_cos, Angle, Coord, Length};
+use crate::math::{isqrt, mul_wide, quotient, sin_cos, Angle, Coord, Length};
 use crate::model::locate::turns::Turn;
 use crate::model::locate::{Readings, MAX_VIEWS};
 use crate::model::measurement::{Arena, Beam, LidarId, Wall};
@@ -226,6 +226,8 @@ impl Model<'_> {
             let (from, to) = (HEADING.saturating_add(j), HEADING.saturating_add(j).saturating_add(1));
             let (a, b) = (get(from), get(to));
             let ticks = i64::from(t.ticks);
+            // a reading's share of the turn: its tick over the turn's, Q16
+            let per_tick = quotient(1, u64::from(t.ticks.max(1)), 32);
             if ticks > 0 {
                 emit(&|| {
                     let (rate, way) = if t.clockwise { (get(CW), 1) } else { (get(CCW).saturating_neg(), -1) };
@@ -237,7 +239,7 @@ impl Model<'_> {
                 });
             }
             for s in t.samples() {
-                let done = div_i64(i64::from(s.tick) << 16, ticks.max(1)).unwrap_or(0).clamp(0, 1 << 16);
+                let done = (u64::from(s.tick).saturating_mul(per_tick) >> 16).min(1 << 16) as i64;
                 let theta = a.saturating_add(mul_shr(b.saturating_sub(a), done, 16));
                 let at = At { theta, from: (from, (1 << 16) - done), to: (to, done) };
                 for id in [LidarId::Front, LidarId::Right] {
@@ -342,16 +344,17 @@ impl Model<'_> {
     fn inverse_sigma(&self, beam: &Beam) -> i64 {
         let (cone, axis) = (i64::from(beam.cone_normal), i64::from(beam.normal));
         let axis2 = mul_shr(axis, axis, 30);
-        let tan2 = div_i64(Q30.saturating_sub(axis2) << 16, axis2).unwrap_or(TAN2_MAX).min(TAN2_MAX);
+        let tan2 = quotient(Q30.saturating_sub(axis2) as u32, axis2.max(0) as u64, 16).min(TAN2_MAX as u64) as i64;
         let mut var = LIDAR_VAR.saturating_add(mul_shr(INCIDENCE_VAR, tan2, 16));
         if beam.near_corner(est::CORNER_MARGIN) {
             var = var.saturating_add(CORNER_VAR);
         }
         let cos = cone.saturating_sub(mul_shr(cone.saturating_sub(axis), self.share.q30(), 30));
         let var = mul_shr(var, mul_shr(cos, cos, 30), 30);
-        // at least a sixteenth of a mm (a beam along the wall)
-        let sigma = i64::from(isqrt64((var.max(1) as u64) << 16)).max(1 << 12);
-        div_i64(1 << 40, sigma).unwrap_or(0)
+        // Q8 from the variance's Q16, then Q16; at least a sixteenth of a
+        // mm (a beam along the wall)
+        let sigma = (isqrt(var.clamp(1, i64::from(u32::MAX)) as u32) << 8).max(1 << 12);
+        quotient(1, u64::from(sigma), 40).min(i32::MAX as u64) as i64
     }
 }
 

@@ -8,7 +8,7 @@
 //! once (its pivot's reciprocal). A step costs about one pass's slice.
 
 use super::rows::{Loss, Row, MAX_PARAMS, ROBUST, UNITS};
-use crate::math::{div_i64, isqrt64, mul_wide};
+use crate::math::{div_i64, isqrt64, mul_wide, quotient};
 
 /// Q24: the scaled system's one.
 const ONE: i64 = 1 << 24;
@@ -23,7 +23,10 @@ const C2: i32 = (ROBUST * ROBUST) as i32;
 /// `c^2 / (c^2 + r^2)` for a reading's row, Q16 (1 for a prior's).
 fn bound(row: &Row) -> i64 {
     match row.loss {
-        Loss::Robust => div_i64(i64::from(C2) << 16, i64::from(C2).saturating_add(mul_wide(row.r, row.r))).unwrap_or(0),
+        Loss::Robust => {
+            let den = i64::from(C2).saturating_add(mul_wide(row.r, row.r)).max(1) as u64;
+            quotient(C2 as u32, den, 16).min(1 << 16) as i64
+        }
         Loss::Square(_) => 1 << 16,
     }
 }
@@ -65,7 +68,8 @@ impl Sums {
         for &(k, jk) in row.cols() {
             let (k, wj) = (usize::from(k), (mul_wide(jk, w) >> 16) as i32);
             if let Some(g) = self.g.get_mut(k) {
-                *g = g.saturating_add((mul_wide(wj, row.r) >> 4).clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32);
+                *g =
+                    g.saturating_add((mul_wide(wj, row.r) >> 4).clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32);
             }
             for &(l, jl) in row.cols() {
                 let l = usize::from(l);
@@ -114,7 +118,11 @@ impl Sums {
             }
             let diag = m.get_mut(k)?.get_mut(k)?;
             // an unused parameter's row: 1 on the diagonal, nothing else
-            *diag = if *used.get(k)? { i64::from(*diag).saturating_add(lambda(i64::from(*diag))) as i32 } else { ONE as i32 };
+            *diag = if *used.get(k)? {
+                i64::from(*diag).saturating_add(lambda(i64::from(*diag))) as i32
+            } else {
+                ONE as i32
+            };
             // the right-hand side in Q12
             let g = scale(i64::from(*self.g.get(k)?) << 4, sk).saturating_neg() >> 12;
             *b.get_mut(k)? = if *used.get(k)? { g.clamp(-(1 << 30), 1 << 30) as i32 } else { 0 };

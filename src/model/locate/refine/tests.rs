@@ -59,10 +59,14 @@ fn survey(pivot: (f64, f64), lever: f64, headings: &[f64], bias: f64, spoil: f64
 }
 
 fn refine_all(fix: &Fix, views: &[Readings], turns: &[Turn]) -> (Refined, u32) {
-    let mut r = Refine::new(fix, views, turns);
+    let mut r = Refine::new(*fix, views, turns);
     for passes in 1..20_000 {
         if let Some(done) = r.step(&ARENA, views, turns) {
-            return (done.expect("a refined pose"), passes);
+            let refined = done.expect("a refined pose");
+            // the fix takes the refined pose, and the flag
+            let fix = r.refined_fix();
+            assert_eq!((fix.pose, fix.untrusted), (refined.pose, !refined.vouched));
+            return (refined, passes);
         }
     }
     panic!("the refinement did not end");
