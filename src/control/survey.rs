@@ -47,6 +47,7 @@ use crate::config::timing::LOOP_HZ;
 use crate::control::goto::position_steerable;
 use crate::math::{Angle, Length};
 use crate::model::locate::turns::Turn;
+use crate::model::locate::refine::Refine;
 use crate::model::locate::{Fix, LocateError, Readings, Search, MAX_VIEWS};
 use crate::model::measurement::{Arena, LidarId};
 
@@ -125,6 +126,9 @@ enum Phase {
     Turn,
     Settle,
     Search(Search),
+    /// The search's fix refined with every reading
+    /// ([`crate::model::locate::refine`]).
+    Refine(Refine),
 }
 
 /// Loop ticks in `ms` (whole ticks, rounded down; const-evaluated).
@@ -189,8 +193,10 @@ struct Sweep {
     /// The farthest turned each way: the ground between was swept, and a
     /// view taken at every turn.
     edges: [i8; 2],
-    /// The view (its index) taken at each edge.
+    /// The view (its index) taken at each edge, and its near front
+    /// reading (`ViewSums::near_front`).
     edge_views: [usize; 2],
+    edge_fronts: [Option<Length>; 2],
     /// A turn that way was blocked (the compass showed it).
     blocked: [bool; 2],
     /// Steps of the turn under way: from where it is past the edge that
@@ -200,7 +206,8 @@ struct Sweep {
 
 impl Sweep {
     /// At the first view, nothing swept.
-    const START: Sweep = Sweep { at: 0, edges: [0, 0], edge_views: [0, 0], blocked: [false, false], steps: 1 };
+    const START: Sweep =
+        Sweep { at: 0, edges: [0, 0], edge_views: [0, 0], edge_fronts: [None, None], blocked: [false, false], steps: 1 };
 }
 
 impl Default for Survey {
@@ -261,6 +268,19 @@ impl Survey {
         *positioned = false;
         *sweep = Sweep::START;
         *room = RoomLog::default();
+    }
+
+    /// The answer when the procedure's time ran out: the fix refined as
+    /// far as it got, reported uncertain, while refining; else none.
+    pub fn out_of_time(&self) -> Result<Fix, Failure> {
+        match &self.phase {
+            Phase::Refine(refine) => {
+                let mut fix = refine.refined_fix();
+                fix.untrusted = true;
+                Ok(fix)
+            }
+            _ => Err(Failure::OutOfTime),
+        }
     }
 
     /// What the survey did to keep off the walls so far.
@@ -339,6 +359,15 @@ impl Survey {
                 None => Action::Stand,
                 Some(result) => self.searched(result.map_err(Failure::from)),
             },
+            Phase::Refine(refine) => {
+                // (the fields, not `views()` and `turns()`: the phase is borrowed)
+                let views = self.views.get(..self.count).unwrap_or(&[]);
+                let turns = self.turns.get(..self.count.saturating_sub(1)).unwrap_or(&self.turns);
+                match refine.step(arena, views, turns) {
+                    None => Action::Stand,
+                    Some(_) => Action::Done(Ok(refine.refined_fix())),
+                }
+            }
         }
     }
 
@@ -347,9 +376,10 @@ impl Survey {
         let Some(r) = self.view.readings() else {
             return Action::Done(Err(Failure::NoHeading));
         };
+        let near_front = self.view.near_front();
         if !self.positioned {
             self.positioned = true;
-            let mm = room::positioning_mm(r.front);
+            let mm = room::positioning_mm(near_front);
             if mm != 0 {
                 return self.drive(mm);
             }
@@ -370,9 +400,9 @@ impl Survey {
                 (*ccw, *cw) = ((*ccw).min(sw.at), (*cw).max(sw.at));
             }
         }
-        for (edge, view) in sw.edges.iter().zip(sw.edge_views.iter_mut()) {
+        for ((edge, view), front) in sw.edges.iter().zip(sw.edge_views.iter_mut()).zip(sw.edge_fronts.iter_mut()) {
             if *edge == sw.at {
-                *view = self.count;
+                (*view, *front) = (self.count, near_front);
             }
         }
         if let Some(slot) = self.views.get_mut(self.count) {
@@ -411,7 +441,10 @@ impl Survey {
         let room = |clockwise: bool, ahead: Ahead| {
             let way = usize::from(clockwise);
             let edge_view = sw.edge_views.get(way).and_then(|&i| views.get(i));
-            sw.blocked.get(way) == Some(&false) && edge_view.is_some_and(|v| room::room_to_turn(v, clockwise, ahead))
+            // the room ahead from the view's near front reading
+            let front = sw.edge_fronts.get(way).copied().flatten();
+            let edge_view = edge_view.map(|v| Readings { front, ..*v });
+            sw.blocked.get(way) == Some(&false) && edge_view.is_some_and(|v| room::room_to_turn(&v, clockwise, ahead))
         };
         let few = self.count < config::locate::MIN_VIEWS;
         let way = [(self.clockwise, Ahead::Slanted), (!self.clockwise, Ahead::Slanted)]
@@ -460,7 +493,12 @@ impl Survey {
         match result {
             // (the fix's heading is the compass's, within goto's limit)
             Ok(fix) if (!fix.ambiguous && position_steerable(fix.sigma_x, fix.sigma_y, 1)) || last_view => {
-                Action::Done(Ok(fix))
+                if config::refine::ENABLED {
+                    let refine = Refine::new(fix, self.views(), self.turns());
+                    self.enter(Phase::Refine(refine))
+                } else {
+                    Action::Done(Ok(fix))
+                }
             }
             Err(e) if last_view => Action::Done(Err(e)),
             _ => self.turn(),

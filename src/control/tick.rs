@@ -98,7 +98,6 @@ pub use sensor::SensorHealth;
 pub use settings::{Source, Sources};
 
 pub use crate::control::hardware::Hardware;
-use crate::control::survey::Failure;
 
 /// Where the loop writes its output lines (without terminators): the UART
 /// on the robot, a `Vec<String>` in tests, a channel in the simulator.
@@ -367,7 +366,8 @@ impl<H: Hardware> Controller<H> {
                 self.halt("did not get there in time", now, sink);
             }
             Some(0) if matches!(self.mode, Mode::Locate { .. }) => {
-                self.end_locate(Err(Failure::OutOfTime), sink);
+                let result = self.localizing.survey.out_of_time();
+                self.end_locate(result, sink);
             }
             Some(0) => {
                 self.mode = Mode::Idle;
