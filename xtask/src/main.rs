@@ -2,6 +2,7 @@
 //! and that image booted on the project's emulated board.
 use std::process::ExitCode;
 
+mod callgraph;
 mod elf;
 mod emu;
 mod esptool;
