@@ -11,13 +11,14 @@
 //! a8; mov.n a1, a8`; our assembly `addmi a1, a1, -256`. The reading follows
 //! what each register holds through those instructions, in address order.
 use std::collections::{BTreeMap, BTreeSet};
-use std::ops::Range;
 use std::path::Path;
 use std::process::Command;
 
 use object::{Object, ObjectSection, ObjectSymbol, SymbolKind};
 
 use crate::image::XT_OBJDUMP;
+
+mod flow;
 
 /// The firmware's functions with their calls and frames.
 pub struct Functions {
@@ -37,19 +38,6 @@ pub struct Function {
     pub lost_sp: Option<u32>,
 }
 
-/// What a register holds, as the disassembly shows it.
-#[derive(Clone, Copy)]
-enum Reg {
-    /// A constant: a literal loaded with l32r, or movi.
-    Const(u32),
-    /// The address of an entry of a table at that address (addx4).
-    TableSlot(u32),
-    /// An entry loaded from that table.
-    TableEntry(u32),
-    /// The stack pointer at the function's entry plus this many bytes.
-    Sp(i64),
-}
-
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Call {
     To(u32),
@@ -57,30 +45,27 @@ pub enum Call {
     Unknown(u32),
 }
 
-/// The stack pointer.
-const SP: &str = "a1";
-/// What a call leaves unchanged (CALL0 ABI: a12..a15 are callee-saved, and
-/// the stack pointer); a0 and a2..a11 hold whatever the callee left.
-const CALLEE_SAVED: [&str; 5] = [SP, "a12", "a13", "a14", "a15"];
-
 impl Functions {
     pub fn read(file: &object::File, path: &Path) -> Result<Self, String> {
         // Function extents from the symbol table; where a symbol has no
-        // size (assembly without .size), up to the next symbol.
-        let mut starts: Vec<(u32, u32, String)> = file
+        // size (assembly without .size), up to the next symbol or the end
+        // of its section.
+        let mut starts: Vec<(u32, u32, u32, String)> = file
             .symbols()
             .filter(|s| s.kind() == SymbolKind::Text && s.is_definition())
             .filter_map(|s| {
                 let addr = u32::try_from(s.address()).ok()?;
                 let size = u32::try_from(s.size()).ok()?;
-                Some((addr, size, format!("{:#}", rustc_demangle::demangle(s.name().ok()?))))
+                let section = file.section_by_index(s.section_index()?).ok()?;
+                let section_end = u32::try_from(section.address() + section.size()).ok()?;
+                Some((addr, size, section_end, format!("{:#}", rustc_demangle::demangle(s.name().ok()?))))
             })
             .collect();
         starts.sort_by_key(|s| s.0);
         starts.dedup_by_key(|s| s.0);
         let mut extents: BTreeMap<u32, (u32, String)> = BTreeMap::new();
-        for (i, (addr, size, name)) in starts.iter().enumerate() {
-            let next = starts.get(i + 1).map_or(u32::MAX, |s| s.0);
+        for (i, (addr, size, section_end, name)) in starts.iter().enumerate() {
+            let next = starts.get(i + 1).map_or(u32::MAX, |s| s.0).min(*section_end);
             let end = if *size > 0 { addr.saturating_add(*size).min(next) } else { next };
             extents.insert(*addr, (end, name.clone()));
         }
@@ -105,113 +90,22 @@ impl Functions {
         extents: &BTreeMap<u32, (u32, String)>,
         word: impl Fn(u32) -> Option<u32>,
     ) -> Self {
-        let mut by_start: BTreeMap<u32, Function> = BTreeMap::new();
-        // what each register holds, as far as the function's code since
-        // its start shows
-        let mut regs: BTreeMap<String, Reg> = BTreeMap::new();
-        let mut current: Option<u32> = None;
+        let mut code: BTreeMap<u32, Vec<(u32, &str, &str)>> = BTreeMap::new();
         for line in text.lines() {
             let Some((addr, mnemonic, operands)) = parse_instruction(line) else { continue };
-            let Some((&start, (end, name))) = extents.range(..=addr).next_back() else { continue };
-            if addr >= *end {
-                continue; // a literal pool or padding between functions
-            }
-            if current != Some(start) {
-                current = Some(start);
-                regs.clear();
-                regs.insert(SP.to_string(), Reg::Sp(0));
-            }
-            let body = start..*end;
-            let function = by_start.entry(start).or_insert_with(|| Function {
-                name: name.clone(),
-                calls: Vec::new(),
-                frame: 0,
-                lost_sp: None,
-            });
-            let ops: Vec<&str> = operands.split(',').map(|o| o.split_whitespace().next().unwrap_or("")).collect();
-            let op = |i: usize| ops.get(i).copied().unwrap_or("");
-            let sp_before = regs.get(SP).copied();
-            match mnemonic {
-                "call0" | "j" => {
-                    if let Some(target) = parse_hex(op(0)) {
-                        // a jump inside the function is a branch, not a call
-                        if mnemonic == "call0" || !body.contains(&target) {
-                            function.calls.push(Call::To(target));
-                        }
-                    }
-                }
-                "callx0" | "jx" => match regs.get(op(0)).copied() {
-                    Some(Reg::Const(target)) => function.calls.push(Call::To(target)),
-                    // a switch: every entry of the table jumps inside the function
-                    Some(Reg::TableEntry(table)) if mnemonic == "jx" && table_within(&word, table, &body) => {}
-                    _ => function.calls.push(Call::Unknown(addr)),
-                },
-                "l32r" => set(&mut regs, op(0), parse_hex(op(1)).and_then(&word).map(Reg::Const)),
-                "movi" | "movi.n" => set(&mut regs, op(0), parse_imm(op(1)).map(|v| Reg::Const(v as u32))),
-                "addi" | "addi.n" | "addmi" => {
-                    let value = match (regs.get(op(1)).copied(), parse_imm(op(2))) {
-                        (Some(Reg::Sp(k)), Some(imm)) => Some(Reg::Sp(k + imm)),
-                        (Some(Reg::Const(c)), Some(imm)) => Some(Reg::Const(c.wrapping_add(imm as u32))),
-                        _ => None,
-                    };
-                    set(&mut regs, op(0), value);
-                }
-                "add" | "add.n" | "sub" => {
-                    let sign = if mnemonic == "sub" { -1 } else { 1 };
-                    let value = match (regs.get(op(1)).copied(), regs.get(op(2)).copied()) {
-                        (Some(Reg::Sp(k)), Some(Reg::Const(c))) => Some(Reg::Sp(k + sign * i64::from(c as i32))),
-                        (Some(Reg::Const(c)), Some(Reg::Sp(k))) if sign > 0 => Some(Reg::Sp(k + i64::from(c as i32))),
-                        (Some(Reg::Const(a)), Some(Reg::Const(b))) => {
-                            Some(Reg::Const(if sign > 0 { a.wrapping_add(b) } else { a.wrapping_sub(b) }))
-                        }
-                        _ => None,
-                    };
-                    set(&mut regs, op(0), value);
-                }
-                "mov" | "mov.n" => {
-                    let value = regs.get(op(1)).copied();
-                    set(&mut regs, op(0), value);
-                }
-                "or" if op(1) == op(2) => {
-                    let value = regs.get(op(1)).copied();
-                    set(&mut regs, op(0), value);
-                }
-                "addx4" => match regs.get(op(2)).copied() {
-                    Some(Reg::Const(table)) => set(&mut regs, op(0), Some(Reg::TableSlot(table))),
-                    _ => set(&mut regs, op(0), None),
-                },
-                "l32i" | "l32i.n" => match regs.get(op(1)).copied() {
-                    Some(Reg::TableSlot(table)) if op(2) == "0" => set(&mut regs, op(0), Some(Reg::TableEntry(table))),
-                    _ => set(&mut regs, op(0), None),
-                },
-                _ => {
-                    if writes_first_operand(mnemonic) {
-                        set(&mut regs, op(0), None);
-                    }
-                }
-            }
-            if mnemonic.starts_with("call") {
-                regs.retain(|r, _| CALLEE_SAVED.contains(&r.as_str()));
-            }
-            if op(0) == SP && writes_first_operand(mnemonic) {
-                let before = match sp_before {
-                    Some(Reg::Sp(k)) => k,
-                    _ => 0,
-                };
-                match regs.get(SP) {
-                    Some(Reg::Sp(after)) => {
-                        function.frame = function.frame.saturating_add(u32::try_from(before - after).unwrap_or(0));
-                    }
-                    // a stack pointer loaded back from memory (our exception
-                    // handlers' return): taken as the entry's
-                    _ if mnemonic.starts_with("l32i") => {}
-                    _ => _ = function.lost_sp.get_or_insert(addr),
-                }
-                if !matches!(regs.get(SP), Some(Reg::Sp(_))) {
-                    regs.insert(SP.to_string(), Reg::Sp(0));
-                }
+            let Some((&start, (end, _))) = extents.range(..=addr).next_back() else { continue };
+            if addr < *end {
+                // (past the end: a literal pool or padding between functions)
+                code.entry(start).or_default().push((addr, mnemonic, operands));
             }
         }
+        let by_start = code
+            .into_iter()
+            .map(|(start, insns)| {
+                let (end, name) = &extents[&start];
+                (start, flow::read(name, &(start..*end), &insns, &word))
+            })
+            .collect();
         Self { by_start }
     }
 
@@ -257,13 +151,6 @@ impl Functions {
     }
 }
 
-fn set(regs: &mut BTreeMap<String, Reg>, reg: &str, value: Option<Reg>) {
-    match value {
-        Some(v) => _ = regs.insert(reg.to_string(), v),
-        None => _ = regs.remove(reg),
-    }
-}
-
 /// Reads 32-bit words (literal pool entries) from the loaded sections.
 struct Words<'a, 'd> {
     file: &'a object::File<'d>,
@@ -280,16 +167,6 @@ impl Words<'_, '_> {
     }
 }
 
-/// Whether the jump table at `table` holds addresses inside `body`: its
-/// entries, read until the first that is not, must be at least one.
-fn table_within(word: impl Fn(u32) -> Option<u32>, table: u32, body: &Range<u32>) -> bool {
-    let entries = (0u32..)
-        .map_while(|i| word(table.checked_add(i.checked_mul(4)?)?))
-        .take_while(|target| body.contains(target))
-        .count();
-    entries > 0
-}
-
 /// `40100230:\taddi\ta1, a1, -16` -> (address, mnemonic, operands).
 pub fn parse_instruction(line: &str) -> Option<(u32, &str, &str)> {
     let (addr, rest) = line.trim_start().split_once(':')?;
@@ -299,22 +176,13 @@ pub fn parse_instruction(line: &str) -> Option<(u32, &str, &str)> {
     Some((addr, mnemonic, parts.next().unwrap_or("").trim()))
 }
 
-fn parse_hex(text: &str) -> Option<u32> {
+pub(crate) fn parse_hex(text: &str) -> Option<u32> {
     u32::from_str_radix(text, 16).ok()
-}
-
-/// An immediate as objdump writes it: decimal (`-64`) or, for `addmi` and
-/// large `movi`s, hexadecimal of the 32-bit value (`0xfffff600` = -2560).
-fn parse_imm(text: &str) -> Option<i64> {
-    match text.strip_prefix("0x") {
-        Some(hex) => u32::from_str_radix(hex, 16).ok().map(|v| i64::from(v as i32)),
-        None => text.parse().ok(),
-    }
 }
 
 /// Stores, branches, jumps and special-register writes read their first
 /// operand; the other instructions with a register first write it.
-fn writes_first_operand(mnemonic: &str) -> bool {
+pub(crate) fn writes_first_operand(mnemonic: &str) -> bool {
     let m = mnemonic.trim_end_matches(".n");
     let reads = m.starts_with('b')
         || matches!(m, "s8i" | "s16i" | "s32i" | "s32e" | "s32ri" | "s32c1i" | "wsr" | "wur" | "j" | "jx" | "ret")
@@ -434,10 +302,37 @@ mod tests {
     }
 
     #[test]
-    fn two_lowerings_add_up() {
-        // a second prologue after an epilogue (not LLVM's shape): both count
-        let twice = "40100100:\taddi\ta8, a1, -32\n40100103:\tmov.n\ta1, a8\n40100105:\taddi\ta8, a1, 32\n40100108:\tmov.n\ta1, a8\n4010010a:\tret.n\n4010010c:\taddi\ta8, a1, -48\n4010010f:\tmov.n\ta1, a8";
-        assert_eq!(frame(twice), (80, None));
+    fn the_frame_holds_on_a_path_past_an_early_return() {
+        // an early epilogue and return, then code a branch reaches with
+        // the frame still made: its own epilogue, no second frame
+        let early = "40100100:\taddi\ta8, a1, -32\n40100103:\tmov.n\ta1, a8\n40100105:\tbnez.n\ta2, 40100110 <isr+0x10>\n40100107:\taddi\ta8, a1, 32\n4010010a:\tmov.n\ta1, a8\n4010010c:\tret.n\n40100110:\tl32r\ta8, 40100000 <x>\n40100113:\tcallx0\ta8\n40100116:\taddi\ta8, a1, 32\n40100119:\tmov.n\ta1, a8\n4010011b:\tret.n";
+        assert_eq!(frame(early), (32, None));
+        assert_eq!(sample(early).by_start[&0x4010_0100].calls, [Call::To(0x4010_0200)]);
+        // code no path reaches is read knowing nothing: a frame made there
+        // cannot be measured
+        let unreached = "40100100:\tret.n\n40100102:\taddi\ta8, a1, -48\n40100105:\tmov.n\ta1, a8";
+        assert_eq!(frame(unreached), (0, Some(0x4010_0105)));
+    }
+
+    #[test]
+    fn where_two_paths_meet_a_call_goes_to_either_constant() {
+        // a8 is helper on one path, in_flash on the other (with_cache_off's
+        // SPIRead or SPIWrite): both are called
+        let either = "40100100:\tl32r\ta8, 40100000 <x>\n40100103:\tbeqz.n\ta2, 40100108 <isr+0x8>\n40100105:\tl32r\ta8, 40100004 <y>\n40100108:\tcallx0\ta8";
+        assert_eq!(sample(either).by_start[&0x4010_0100].calls, [Call::To(0x4010_0200), Call::To(0x4021_0000)]);
+        // unknown on one of the paths: unknown
+        let unknown = "40100100:\tl32r\ta8, 40100000 <x>\n40100103:\tbeqz.n\ta2, 40100108 <isr+0x8>\n40100105:\tl32i.n\ta8, a2, 0\n40100108:\tcallx0\ta8";
+        assert_eq!(sample(unknown).by_start[&0x4010_0100].calls, [Call::Unknown(0x4010_0108)]);
+    }
+
+    #[test]
+    fn a_callee_spilled_to_the_frame_is_followed() {
+        // spilled, a call clobbers a9, loaded back and called
+        let spilled = "40100100:\taddi\ta8, a1, -16\n40100103:\tmov.n\ta1, a8\n40100105:\tl32r\ta9, 40100000 <x>\n40100108:\ts32i.n\ta9, a1, 4\n4010010a:\tcall0\t40210000 <in_flash>\n4010010d:\tl32i.n\ta8, a1, 4\n4010010f:\tcallx0\ta8";
+        assert_eq!(sample(spilled).by_start[&0x4010_0100].calls, [Call::To(0x4021_0000), Call::To(0x4010_0200)]);
+        // the slot overwritten (a narrower store) before the load: unknown
+        let spoiled = "40100100:\taddi\ta8, a1, -16\n40100103:\tmov.n\ta1, a8\n40100105:\tl32r\ta9, 40100000 <x>\n40100108:\ts32i.n\ta9, a1, 4\n4010010a:\ts8i\ta2, a1, 6\n4010010d:\tl32i.n\ta8, a1, 4\n4010010f:\tcallx0\ta8";
+        assert_eq!(sample(spoiled).by_start[&0x4010_0100].calls, [Call::Unknown(0x4010_010f)]);
     }
 
     #[test]

@@ -23,6 +23,7 @@ use std::path::Path;
 use object::{Object, ObjectSection, ObjectSymbol, SectionFlags};
 
 use crate::callgraph::Functions;
+use crate::stack;
 
 /// The ESP8266's address map (Espressif, ESP8266 Technical Reference, the
 /// memory map): instruction RAM, data RAM, the mask ROM and the window
@@ -153,6 +154,11 @@ pub fn check(path: &Path) -> Result<String, String> {
                 ));
             }
         }
+        Err(e) => failures.push(e),
+    }
+
+    match stack::check(&functions) {
+        Ok(lines) => report.push_str(&lines),
         Err(e) => failures.push(e),
     }
 

@@ -120,6 +120,18 @@ pub fn main(args: &[String]) -> Result<(), String> {
     Ok(())
 }
 
+/// `fw-check [ELF]`: the checks of [`crate::elf`] on an ELF already built
+/// (`target/image/paperbot.elf` unless named), without building.
+pub fn check_only(args: &[String]) -> Result<(), String> {
+    let elf_path = match args {
+        [] => repo_root().join("target/image/paperbot.elf"),
+        [path] if !path.starts_with('-') => PathBuf::from(path),
+        _ => return Err("usage: fw-check [ELF]".into()),
+    };
+    print!("{}", elf::check(&elf_path)?);
+    Ok(())
+}
+
 /// The repository (xtask/ is one level below it).
 pub fn repo_root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).parent().map(Path::to_path_buf).unwrap_or_default()
