@@ -296,7 +296,7 @@ impl Walk<'_> {
 pub fn check(functions: &Functions) -> Result<String, String> {
     let thread = deepest(functions, THREAD_ENTRY)?;
     let interrupt = deepest(functions, INTERRUPT_ENTRY)?;
-    judge(&thread, &interrupt)
+    judge(&thread, &interrupt, budget())
 }
 
 /// The bytes the stack may take: from its top down to the floor, less the
@@ -305,9 +305,8 @@ pub fn budget() -> u32 {
     STACK_TOP - STACK_FLOOR - board::STACK_MARGIN_BYTES
 }
 
-fn judge(thread: &Chain, interrupt: &Chain) -> Result<String, String> {
+fn judge(thread: &Chain, interrupt: &Chain, budget: u32) -> Result<String, String> {
     let depth = thread.depth.saturating_add(interrupt.depth);
-    let budget = budget();
     let mut report = String::new();
     let _ = writeln!(
         report,
@@ -335,5 +334,162 @@ fn judge(thread: &Chain, interrupt: &Chain) -> Result<String, String> {
             i64::from(STACK_TOP) - i64::from(depth) - i64::from(STACK_FLOOR),
             board::STACK_MARGIN_BYTES
         ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A small image: the reset entry calls `run` (a 2 KiB frame, as LLVM
+    /// makes large ones), which calls `tick` and `idle` and the ROM's
+    /// SPIWrite; the user vector's handler makes the 256-byte exception
+    /// frame and calls the interrupt.
+    const IMAGE: &str = "\
+40100100:\taddi\ta8, a1, -16
+40100103:\tmov.n\ta1, a8
+40100105:\tl32r\ta8, 40100000 <x>
+40100108:\tcallx0\ta8
+40100200:\tmovi\ta8, 0
+40100203:\taddmi\ta8, a8, 0xfffff800
+40100206:\tadd.n\ta8, a1, a8
+40100208:\tmov.n\ta1, a8
+4010020a:\tl32r\ta9, 40100004 <x>
+4010020d:\ts32i\ta9, a1, 0x104
+40100210:\tcall0\t40100300 <idle>
+40100213:\tl32i\ta8, a1, 0x104
+40100216:\tcallx0\ta8
+40100219:\tl32r\ta8, 40100008 <x>
+4010021c:\tcallx0\ta8
+4010021f:\tj\t4010020a <run+0xa>
+40100300:\taddi\ta8, a1, -32
+40100303:\tmov.n\ta1, a8
+40100305:\taddi\ta8, a1, 32
+40100308:\tmov.n\ta1, a8
+4010030a:\tret.n
+40100400:\taddi\ta8, a1, -96
+40100403:\tmov.n\ta1, a8
+40100405:\taddi\ta8, a1, 96
+40100408:\tmov.n\ta1, a8
+4010040a:\tret.n
+40100500:\tcall0\t40100510 <handler>
+40100510:\tmov.n\ta0, a1
+40100512:\taddmi\ta1, a1, 0xffffff00
+40100515:\tcall0\t40100300 <idle>
+40100518:\tl32i\ta1, a1, 12
+4010051b:\trfe
+";
+
+    fn image(text: &str) -> Functions {
+        let names = [
+            (0x4010_0100, THREAD_ENTRY),
+            (0x4010_0200, "run"),
+            (0x4010_0300, "idle"),
+            (0x4010_0400, "tick"),
+            (0x4010_0500, INTERRUPT_ENTRY),
+            (0x4010_0510, "handler"),
+        ];
+        let extents = names.iter().map(|&(a, n)| (a, (a + 0x100, n.to_string()))).collect();
+        let words = BTreeMap::from([
+            (0x4010_0000u32, 0x4010_0200u32), // run
+            (0x4010_0004, 0x4010_0400),       // tick
+            (0x4010_0008, 0x4000_4a4c),       // SPIWrite, in the ROM
+        ]);
+        Functions::from_disassembly(text, &extents, |a| words.get(&a).copied())
+    }
+
+    fn names(chain: &Chain) -> Vec<(&str, u32)> {
+        chain.frames.iter().map(|(n, f)| (n.as_str(), *f)).collect()
+    }
+
+    #[test]
+    fn the_deepest_chain_adds_the_frames_on_its_way() {
+        let f = image(IMAGE);
+        let thread = deepest(&f, THREAD_ENTRY).unwrap();
+        // run calls idle (32), tick (96: its address spilled to the frame
+        // across idle's call and loaded back) and the ROM's SPIWrite (112)
+        let run = &f.by_start[&0x4010_0200].calls;
+        assert_eq!(run, &[Call::To(0x4010_0300), Call::To(0x4010_0400), Call::To(0x4000_4a4c)]);
+        assert_eq!(names(&thread), [(THREAD_ENTRY, 16), ("run", 2048), ("SPIWrite (ROM)", 112)]);
+        assert_eq!(thread.depth, 16 + 2048 + 112);
+        let interrupt = deepest(&f, INTERRUPT_ENTRY).unwrap();
+        assert_eq!(names(&interrupt), [(INTERRUPT_ENTRY, 0), ("handler", 256), ("idle", 32)]);
+    }
+
+    #[test]
+    fn the_check_fails_past_the_budget() {
+        let f = image(IMAGE);
+        let (thread, interrupt) = (deepest(&f, THREAD_ENTRY).unwrap(), deepest(&f, INTERRUPT_ENTRY).unwrap());
+        let depth = 16 + 2048 + 112 + 256 + 32;
+        let ok = judge(&thread, &interrupt, depth).unwrap();
+        assert!(ok.contains(&format!("worst case {depth} B")), "{ok}");
+        assert!(ok.contains("      2048 B  run"), "{ok}");
+        let over = judge(&thread, &interrupt, depth - 1).unwrap_err();
+        assert!(over.contains(&format!("stack: {depth} B is over the budget of {} B", depth - 1)), "{over}");
+    }
+
+    #[test]
+    fn the_budget_runs_from_the_top_to_the_rom_flash_parameters_less_the_margin() {
+        // SpiFlashChip's table ends 4 + 24 bytes above flashchip
+        assert_eq!(STACK_FLOOR, 0x3FFF_C730);
+        assert_eq!(budget(), 0x3FFF_FFF0 - 0x3FFF_C730 - board::STACK_MARGIN_BYTES);
+    }
+
+    #[test]
+    fn a_call_the_reading_cannot_follow_fails() {
+        // run calls through a register loaded from memory it does not know
+        let text = IMAGE.replace("40100213:\tl32i\ta8, a1, 0x104", "40100213:\tl32i\ta8, a2, 0");
+        let err = deepest(&image(&text), THREAD_ENTRY).unwrap_err();
+        assert!(err.contains("run makes an indirect call at 0x40100216 whose target the check cannot see"), "{err}");
+        assert!(err.contains(&format!("reached by {THREAD_ENTRY} -> run")), "{err}");
+    }
+
+    #[test]
+    fn a_call_into_the_rom_at_an_unknown_routine_fails() {
+        let text = IMAGE.replace("40100008 <x>", "4010000c <x>");
+        let f = {
+            let names =
+                [(0x4010_0100, THREAD_ENTRY), (0x4010_0200, "run"), (0x4010_0300, "idle"), (0x4010_0400, "tick")];
+            let extents = names.iter().map(|&(a, n)| (a, (a + 0x100, n.to_string()))).collect();
+            let words = BTreeMap::from([
+                (0x4010_0000u32, 0x4010_0200u32),
+                (0x4010_0004, 0x4010_0400),
+                (0x4010_000c, 0x4000_2000), // somewhere in the ROM
+            ]);
+            Functions::from_disassembly(&text, &extents, |a| words.get(&a).copied())
+        };
+        let err = deepest(&f, THREAD_ENTRY).unwrap_err();
+        assert!(
+            err.contains("run calls 0x40002000, where no function of the image or known ROM routine starts"),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn recursion_fails_unless_bounded() {
+        // tick goes back to run (a tail call)
+        let text = IMAGE.replace("4010040a:\tret.n", "4010040a:\tj\t40100200 <run>");
+        let err = deepest(&image(&text), THREAD_ENTRY).unwrap_err();
+        assert!(err.contains("a cycle of calls (recursion): run -> tick -> run"), "{err}");
+    }
+
+    #[test]
+    fn a_stack_pointer_the_reading_cannot_follow_fails() {
+        let text = IMAGE.replace("40100300:\taddi\ta8, a1, -32", "40100300:\tsub\ta8, a1, a2");
+        let err = deepest(&image(&text), THREAD_ENTRY).unwrap_err();
+        assert!(err.contains("idle sets the stack pointer at 0x40100303"), "{err}");
+    }
+
+    #[test]
+    fn halt_and_panic_are_not_followed() {
+        assert_eq!(TERMINAL, ["paperbot::board::halt::halt", "core::panicking::panic_fmt"]);
+    }
+
+    #[test]
+    fn the_parse_recursion_bound_follows_the_longest_command_line() {
+        let serial = std::fs::read_to_string(crate::image::repo_root().join("src/config/serial.rs")).unwrap();
+        assert!(serial.contains(&format!("pub const MAX_LINE: usize = {MAX_LINE};")), "config::serial::MAX_LINE moved");
+        // 64 bytes hold five `mission add ` and an empty rest: six parses
+        assert_eq!(RECURSION[1].1, 6);
     }
 }
