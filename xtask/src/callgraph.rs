@@ -19,6 +19,7 @@ use object::{Object, ObjectSection, ObjectSymbol, SymbolKind};
 use crate::image::XT_OBJDUMP;
 
 mod flow;
+pub use flow::parse_imm;
 
 /// The firmware's functions with their calls and frames.
 pub struct Functions {

@@ -19,7 +19,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use crate::esptool::FlashParams;
-use crate::{elf, esptool, patch};
+use crate::{elf, esptool, patch, stack};
 
 const USAGE: &str = "\
 usage: cargo fw-image [--clippy] [--flash-mode M] [--flash-freq F] [--flash-size S]
@@ -110,6 +110,7 @@ pub fn main(args: &[String]) -> Result<(), String> {
     println!("== checks ({})", rel(&root, &elf_path));
     let report = elf::check(&elf_path)?;
     print!("{report}");
+    println!("  {}", stack::refuses_deeper(&elf_path, &work.join("paperbot-deeper.elf"))?);
 
     println!("== esptool");
     esptool::write_images(&root, &elf_path, &work.join("paperbot-"), &flash)?;
@@ -129,6 +130,8 @@ pub fn check_only(args: &[String]) -> Result<(), String> {
         _ => return Err("usage: fw-check [ELF]".into()),
     };
     print!("{}", elf::check(&elf_path)?);
+    let copy = elf_path.with_file_name("paperbot-deeper.elf");
+    println!("  {}", stack::refuses_deeper(&elf_path, &copy)?);
     Ok(())
 }
 

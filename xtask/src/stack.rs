@@ -20,6 +20,9 @@ use std::fmt::Write as _;
 
 use crate::callgraph::{Call, Functions};
 
+mod deeper;
+pub use deeper::refuses_deeper;
+
 /// Where SP stands when the image's entry runs: the ROM's `_start` sets SP
 /// to 0x40000000, the top of DRAM, and calls `main`, which makes a 16-byte
 /// frame and calls the image's entry from it (the ESP8266 mask ROM's
