@@ -12,9 +12,18 @@
 //! The bound is static: every function's frame ([`crate::callgraph`]), the
 //! deepest chain of calls from the reset entry, plus the deepest chain from
 //! the level-1 interrupt's vector on top of it (an interrupt can arrive at
-//! any point of that chain), plus the ROM routines' own frames. A call the
-//! reading cannot follow, or a cycle of calls, fails the check: the bound
-//! would not be one.
+//! any point of that chain), plus the ROM routines' own frames
+//! ([`ROM_ROUTINES`]). What the reading of calls cannot show is named here,
+//! each with its reason: calls through trait objects ([`DYN_CALLS`],
+//! [`FMT_DEPTH`]), functions that call themselves ([`RECURSION`]), and the
+//! ways to a reset the walk stops at ([`TERMINAL`]). Any other call it
+//! cannot follow, cycle of calls, or stack pointer it cannot follow fails
+//! the check: the bound would not be one.
+//!
+//! The ROM data between the stack's top and its flash parameters (its UART
+//! state `UartDev` at 0x3FFFDE10, its AES tables from 0x3FFFCCF0,
+//! `eagle.rom.addr.v6.ld`) lies under the firmware's deepest stack: the
+//! firmware uses none of it (its own UART driver, no ROM AES).
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
@@ -35,15 +44,16 @@ pub const STACK_TOP: u32 = 0x3FFF_FFF0;
 
 /// `flashchip` (`eagle.rom.addr.v6.ld`, ESP8266 NONOS SDK): a pointer to
 /// the flash chip's parameters, which the ROM's SPI routines load first
-/// (`l32r a2, 0x3fffc714; l32i a2, a2, 0` in `SPIRead`, bootrom.s). The NONOS
-/// SDK's `spi_flash.h` declares it `extern SpiFlashChip *flashchip; // in
-/// ram ROM-BIOS`.
+/// (`l32r a2, 0x3fffc714; l32i a2, a2, 0` in `SPIRead`, bootrom.s); the
+/// NONOS SDK's `spi_flash.h` declares it a pointer to `SpiFlashChip` in the
+/// ROM's RAM.
 pub const FLASHCHIP: u32 = 0x3FFF_C714;
 /// The table it points to, which the ROM puts right after the pointer
-/// (esp-open-rtos and rBoot's notes on the ROM: "a 24 byte table pointed
-/// to by a pointer at 3FFFC714 ... the next 6 words"): `SpiFlashChip`,
-/// six `uint32`: deviceId, chip_size, block_size, sector_size, page_size,
-/// status_mask (`spi_flash.h`).
+/// (public notes on the ROM: a bootloader's rom.h, a 24-byte table "pointed
+/// to by a pointer at 3FFFC714", by default "the next 6 words"; P.
+/// Finlayson, "ESP8266 16MB Flash Handling", 2016: the structure at
+/// 0x3fffc718): `SpiFlashChip`, six `uint32`: deviceId, chip_size,
+/// block_size, sector_size, page_size, status_mask (`spi_flash.h`).
 pub const FLASHCHIP_TABLE: u32 = FLASHCHIP + 4;
 /// `sizeof(SpiFlashChip)`.
 pub const SPI_FLASH_CHIP_BYTES: u32 = 6 * 4;
