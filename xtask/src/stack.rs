@@ -312,6 +312,16 @@ pub fn check(functions: &Functions) -> Result<String, String> {
     judge(&thread, &interrupt, budget())
 }
 
+/// The static bound of the image at `elf`, bytes: the reset entry's
+/// deepest chain and the interrupt's on top (for `cargo fw-emu --sim-test`,
+/// which holds the board's low-water mark against it).
+pub fn worst_case(elf: &std::path::Path) -> Result<u32, String> {
+    let data = std::fs::read(elf).map_err(|e| format!("{}: {e}", elf.display()))?;
+    let file = object::File::parse(&*data).map_err(|e| format!("{}: {e}", elf.display()))?;
+    let functions = Functions::read(&file, elf)?;
+    Ok(deepest(&functions, THREAD_ENTRY)?.depth + deepest(&functions, INTERRUPT_ENTRY)?.depth)
+}
+
 /// The bytes the stack may take: from its top down to the floor, less the
 /// margin.
 pub fn budget() -> u32 {
