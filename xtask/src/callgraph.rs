@@ -8,8 +8,9 @@
 //! functions so, the target loaded with `l32r` just before), and a function
 //! makes its frame by lowering `a1`: LLVM writes `addi a8, a1, -N; mov.n a1,
 //! a8`, or for larger frames `movi a8, -N` (and `addmi`), `add.n a8, a1,
-//! a8; mov.n a1, a8`; our assembly `addmi a1, a1, -256`. The reading follows
-//! what each register holds through those instructions, in address order.
+//! a8; mov.n a1, a8`; our assembly `addmi a1, a1, -256`. Each function is
+//! read by a dataflow over its branches (`flow`): what each register and
+//! each word of its frame holds before each instruction, on every path.
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 use std::process::Command;
@@ -29,9 +30,8 @@ pub struct Functions {
 pub struct Function {
     pub name: String,
     pub calls: Vec<Call>,
-    /// Bytes the function lowers the stack pointer by: the sum of every
-    /// lowering its code makes, an upper bound of its frame (LLVM lowers it
-    /// once, in the prologue).
+    /// Bytes the function's frame takes: the most the stack pointer stands
+    /// below its value at the entry, on any path through the function.
     pub frame: u32,
     /// Where the code sets the stack pointer to a value the reading cannot
     /// follow (neither the stack pointer plus a known amount nor a value

@@ -185,7 +185,7 @@ pub struct Chain {
 /// stack use is not known, or a cycle of calls.
 pub fn deepest(functions: &Functions, entry: &str) -> Result<Chain, String> {
     let start = functions.start_of(entry)?;
-    let mut walk = Walk { functions, done: BTreeMap::new(), open: Vec::new() };
+    let mut walk = Walk { functions, done: BTreeMap::new(), open: Vec::new(), cuts: 0 };
     walk.from(start, FMT_DEPTH)
 }
 
@@ -196,6 +196,8 @@ struct Walk<'a> {
     done: BTreeMap<(u32, u32), Chain>,
     /// the functions on the way to the one being walked
     open: Vec<u32>,
+    /// how many times a recursion was cut at its bound ([`RECURSION`])
+    cuts: usize,
 }
 
 impl Walk<'_> {
@@ -237,13 +239,17 @@ impl Walk<'_> {
             let open = self.open.iter().filter(|&&a| a == addr).count();
             match recursion {
                 // as often as RECURSION says it recurses: not deeper
-                Some(times) if open >= times => return Ok(Chain::default()),
+                Some(times) if open >= times => {
+                    self.cuts += 1;
+                    return Ok(Chain::default());
+                }
                 Some(_) => {}
                 None if fmt => {}
                 None => return Err(format!("a cycle of calls (recursion): {} -> {}", self.way(from), function.name)),
             }
         }
         self.open.push(addr);
+        let cuts = self.cuts;
         let below = if fmt { fmt_left - 1 } else { fmt_left };
         let mut deepest = Chain::default();
         for call in &function.calls {
@@ -262,7 +268,8 @@ impl Walk<'_> {
         let mut frames = vec![(function.name.clone(), function.frame)];
         frames.extend(deepest.frames);
         let chain = Chain { depth: function.frame.saturating_add(deepest.depth), frames };
-        if recursion.is_none() {
+        // (a chain a recursion was cut in depends on what was open)
+        if recursion.is_none() && self.cuts == cuts {
             self.done.insert((addr, fmt_left), chain.clone());
         }
         Ok(chain)
@@ -494,6 +501,21 @@ mod tests {
         let text = IMAGE.replace("4010040a:\tret.n", "4010040a:\tj\t40100200 <run>");
         let err = deepest(&image(&text), THREAD_ENTRY).unwrap_err();
         assert!(err.contains("a cycle of calls (recursion): run -> tick -> run"), "{err}");
+    }
+
+    #[test]
+    fn a_bounded_recursion_is_walked_as_often_as_its_bound() {
+        // the entry calls format_command (64 B), which calls itself
+        let text = "40100100:\tcall0\t40100200 <f>\n40100200:\taddi\ta8, a1, -64\n40100203:\tmov.n\ta1, a8\n40100205:\tcall0\t40100200 <f>\n40100208:\taddi\ta8, a1, 64\n4010020b:\tmov.n\ta1, a8\n4010020d:\tret.n\n";
+        let (name, times) = RECURSION[0];
+        let extents = BTreeMap::from([
+            (0x4010_0100, (0x4010_0200, THREAD_ENTRY.to_string())),
+            (0x4010_0200, (0x4010_0300, name.to_string())),
+        ]);
+        let f = Functions::from_disassembly(text, &extents, |_| None);
+        let chain = deepest(&f, THREAD_ENTRY).unwrap();
+        assert_eq!(chain.depth, 64 * u32::try_from(times).unwrap());
+        assert_eq!(chain.frames.iter().filter(|(n, _)| n == name).count(), times);
     }
 
     #[test]
