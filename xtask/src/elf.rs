@@ -12,6 +12,8 @@
 //! - everything reachable from the flash routines' caller (which turns the
 //!   flash cache off around the ROM's SPIRead/SPIWrite/SPIEraseSector) in
 //!   IRAM or ROM, for the same reason;
+//! - the stack's worst-case depth within its budget, above the ROM's flash
+//!   parameters ([`crate::stack`]);
 //! - the memory budget;
 //! - the flash-mapped code ends before the settings sectors
 //!   (`src/config/settings.rs`, included here as it is).

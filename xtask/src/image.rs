@@ -11,7 +11,9 @@
 //!    patched in, linked through `xtensa/xt-link.sh` (GNU as, the literal
 //!    fix) with our `memory.x`, `exception.x` and `rom-functions.x`;
 //! 4. the checks of [`crate::elf`] (entry point, undefined symbols,
-//!    vectors, interrupt code in IRAM, budgets), each failing the build;
+//!    vectors, interrupt code in IRAM, the stack's depth, budgets), each
+//!    failing the build, and the stack check's negative test (a deeper
+//!    copy of the image it must refuse, [`crate::stack::refuses_deeper`]);
 //! 5. esptool's `elf2image` with the flash parameters, and `image-info`,
 //!    which must report them ([`crate::esptool`]).
 use std::fs;
@@ -29,7 +31,7 @@ named in xtensa/nightly and writes
   target/image/paperbot.elf          the linked firmware
   target/image/paperbot-0x00000.bin  the boot image (flash offset 0x00000)
   target/image/paperbot-0x10000.bin  the flash-mapped code (offset 0x10000)
-then checks the ELF and prints the memory budget.
+then checks the ELF and prints the memory and stack budgets.
 
   --clippy        first run clippy (the panic lints) on the board code and
                   the firmware, for the same target, warnings as errors
