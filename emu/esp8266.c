@@ -45,7 +45,8 @@
  *                     programs and erases are written back to it
  *   flash-power-ops=N the power fails before the N+1th program or erase
  *   events=FILE       "<virtual ns> <event>" lines: GPIO edges, UART input
- *                     lines fed, resets
+ *                     lines fed, resets; at a timed run's end the stack's
+ *                     low-water mark (stack-low ADDR)
  *   uart-input=FILE   bytes fed to UART0 RX at the baud rate, a line at a
  *                     time, input-gap-ms apart, starting input-gap-ms after
  *                     UART0 TX has sent the text uart-input-after (or at
@@ -270,6 +271,29 @@ static FILE *open_events(const char *path)
     return f;
 }
 
+/* The top of DRAM, above the image's (memory.x's dram_seg ends at
+ * 0x3FFFC000): the stack the ROM hands the image grows down from 0x3FFFFFF0
+ * there, and nothing else on this board writes it (its ROM keeps no data). */
+#define STACK_REGION_BASE 0x3fffc000u
+
+/* The stack's low-water mark over the run: the lowest byte of the region
+ * that no longer holds the power-on pattern, logged as `stack-low ADDR`
+ * (`cargo fw-emu --sim-test` holds it against xtask's static bound). A
+ * deepest byte that happened to be written with the pattern itself would
+ * read a few bytes shallower. */
+static void log_stack_low(Esp8266State *s)
+{
+    static uint8_t region[DRAM_BASE + DRAM_SIZE - STACK_REGION_BASE];
+    uint32_t at = 0;
+
+    address_space_read(&address_space_memory, STACK_REGION_BASE, MEMTXATTRS_UNSPECIFIED, region,
+                       sizeof(region));
+    while (at < sizeof(region) && region[at] == POWER_ON_PATTERN) {
+        at++;
+    }
+    log_event(s, "stack-low 0x%08x", STACK_REGION_BASE + at);
+}
+
 /* The end of a timed run (stop-ms): QEMU exits with status 0. The main loop
  * acts on the request a little later; what the guest sends meanwhile is
  * dropped, so a run's output ends at exactly stop-ms. */
@@ -277,6 +301,7 @@ void stop_expired(void *opaque)
 {
     Esp8266State *s = opaque;
 
+    log_stack_low(s);
     log_event(s, "stop");
     if (s->profile) {
         profile_write(s);

@@ -28,3 +28,8 @@ pub const LED_BLINK_FAULT_MS: u32 = 100;
 /// have completed this long after the servo timer started, or the FRC1
 /// interrupt is reported not running, ms (issue 28).
 pub const SERVO_TIMER_CHECK_MS: u32 = 50;
+/// Room the firmware's worst-case stack depth must leave above the ROM's
+/// flash parameters, bytes: `cargo fw-image` bounds the depth from the
+/// image (xtask/src/stack.rs) and fails the build when it comes closer to
+/// them than this.
+pub const STACK_MARGIN_BYTES: u32 = 256;

@@ -12,18 +12,20 @@
 //! - everything reachable from the flash routines' caller (which turns the
 //!   flash cache off around the ROM's SPIRead/SPIWrite/SPIEraseSector) in
 //!   IRAM or ROM, for the same reason;
+//! - the stack's worst-case depth within its budget, above the ROM's flash
+//!   parameters ([`crate::stack`]);
 //! - the memory budget;
 //! - the flash-mapped code ends before the settings sectors
 //!   (`src/config/settings.rs`, included here as it is).
-use std::collections::{BTreeMap, BTreeSet};
+use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::ops::Range;
 use std::path::Path;
-use std::process::Command;
 
-use object::{Object, ObjectSection, ObjectSymbol, SectionFlags, SymbolKind};
+use object::{Object, ObjectSection, ObjectSymbol, SectionFlags};
 
-use crate::image::XT_OBJDUMP;
+use crate::callgraph::Functions;
+use crate::stack;
 
 /// The ESP8266's address map (Espressif, ESP8266 Technical Reference, the
 /// memory map): instruction RAM, data RAM, the mask ROM and the window
@@ -157,6 +159,11 @@ pub fn check(path: &Path) -> Result<String, String> {
         Err(e) => failures.push(e),
     }
 
+    match stack::check(&functions) {
+        Ok(lines) => report.push_str(&lines),
+        Err(e) => failures.push(e),
+    }
+
     let used = usage(&file);
     let _ = writeln!(report, "  memory            used      budget     chip");
     for ((what, budget, chip), used) in BUDGETS.iter().zip(used) {
@@ -261,283 +268,9 @@ fn check_flash_end(end: u32) -> Result<String, String> {
     }
 }
 
-/// The firmware's functions with their calls, from the disassembly.
-struct Functions {
-    /// Start address -> (name, calls: callee addresses).
-    by_start: BTreeMap<u32, (String, Vec<Call>)>,
-}
-
-/// What a register holds, as the disassembly shows it.
-enum Reg {
-    /// A literal loaded with l32r.
-    Const(u32),
-    /// The address of an entry of a table at that address (addx4).
-    TableSlot(u32),
-    /// An entry loaded from that table.
-    TableEntry(u32),
-}
-
-#[derive(Clone, Copy)]
-enum Call {
-    To(u32),
-    /// An indirect call whose target the disassembly does not show.
-    Unknown(u32),
-}
-
-impl Functions {
-    fn read(file: &object::File, path: &Path) -> Result<Self, String> {
-        // Function extents from the symbol table; where a symbol has no
-        // size (assembly without .size), up to the next symbol.
-        let mut starts: Vec<(u32, u32, String)> = file
-            .symbols()
-            .filter(|s| s.kind() == SymbolKind::Text && s.is_definition())
-            .filter_map(|s| {
-                let addr = u32::try_from(s.address()).ok()?;
-                let size = u32::try_from(s.size()).ok()?;
-                Some((addr, size, format!("{:#}", rustc_demangle::demangle(s.name().ok()?))))
-            })
-            .collect();
-        starts.sort_by_key(|s| s.0);
-        starts.dedup_by_key(|s| s.0);
-        let mut extents: BTreeMap<u32, (u32, String)> = BTreeMap::new();
-        for (i, (addr, size, name)) in starts.iter().enumerate() {
-            let next = starts.get(i + 1).map_or(u32::MAX, |s| s.0);
-            let end = if *size > 0 { addr.saturating_add(*size).min(next) } else { next };
-            extents.insert(*addr, (end, name.clone()));
-        }
-
-        let out = Command::new(XT_OBJDUMP)
-            .args(["-d", "--no-show-raw-insn"])
-            .arg(path)
-            .output()
-            .map_err(|e| format!("{XT_OBJDUMP}: {e}"))?;
-        if !out.status.success() {
-            return Err(format!("{XT_OBJDUMP} -d failed"));
-        }
-        let words = Words { file };
-        Ok(Self::from_disassembly(&String::from_utf8_lossy(&out.stdout), &extents, |a| words.at(a)))
-    }
-
-    /// The calls of each function in `extents` (start -> end, name), from
-    /// `objdump -d --no-show-raw-insn` text; `word` reads the image.
-    fn from_disassembly(text: &str, extents: &BTreeMap<u32, (u32, String)>, word: impl Fn(u32) -> Option<u32>) -> Self {
-        let mut by_start: BTreeMap<u32, (String, Vec<Call>)> = BTreeMap::new();
-        // what each register holds, as far as the function's code since
-        // its start shows
-        let mut regs: BTreeMap<String, Reg> = BTreeMap::new();
-        let mut current: Option<u32> = None;
-        for line in text.lines() {
-            let Some((addr, mnemonic, operands)) = parse_instruction(line) else { continue };
-            let Some((&start, (end, name))) = extents.range(..=addr).next_back() else { continue };
-            if addr >= *end {
-                continue; // a literal pool or padding between functions
-            }
-            if current != Some(start) {
-                current = Some(start);
-                regs.clear();
-            }
-            let body = start..*end;
-            let calls = &mut by_start.entry(start).or_insert_with(|| (name.clone(), Vec::new())).1;
-            let ops: Vec<&str> = operands.split(',').map(|o| o.split_whitespace().next().unwrap_or("")).collect();
-            let op = |i: usize| ops.get(i).copied().unwrap_or("");
-            match mnemonic {
-                "call0" | "j" => {
-                    if let Some(target) = parse_hex(op(0)) {
-                        // a jump inside the function is a branch, not a call
-                        if mnemonic == "call0" || !body.contains(&target) {
-                            calls.push(Call::To(target));
-                        }
-                    }
-                }
-                "callx0" | "jx" => match regs.get(op(0)) {
-                    Some(Reg::Const(target)) => calls.push(Call::To(*target)),
-                    // a switch: every entry of the table jumps inside the function
-                    Some(Reg::TableEntry(table)) if mnemonic == "jx" && table_within(&word, *table, &body) => {}
-                    _ => calls.push(Call::Unknown(addr)),
-                },
-                "l32r" => match parse_hex(op(1)).and_then(&word) {
-                    Some(value) => _ = regs.insert(op(0).to_string(), Reg::Const(value)),
-                    None => _ = regs.remove(op(0)),
-                },
-                "addx4" => match regs.get(op(2)) {
-                    Some(Reg::Const(table)) => _ = regs.insert(op(0).to_string(), Reg::TableSlot(*table)),
-                    _ => _ = regs.remove(op(0)),
-                },
-                "l32i" | "l32i.n" => match regs.get(op(1)) {
-                    Some(Reg::TableSlot(table)) if op(2) == "0" => {
-                        _ = regs.insert(op(0).to_string(), Reg::TableEntry(*table))
-                    }
-                    _ => _ = regs.remove(op(0)),
-                },
-                _ => {
-                    if writes_first_operand(mnemonic) {
-                        regs.remove(op(0));
-                    }
-                }
-            }
-        }
-        Self { by_start }
-    }
-
-    /// Every function reachable from `entry`, by address; an error for a
-    /// call whose target cannot be followed.
-    fn reach_from(&self, entry: &str) -> Result<BTreeMap<u32, String>, String> {
-        let start = self
-            .by_start
-            .iter()
-            .find(|(_, (name, _))| name == entry)
-            .map(|(a, _)| *a)
-            .ok_or_else(|| format!("{entry} not found in the firmware"))?;
-        let mut reached = BTreeMap::new();
-        let mut todo = vec![start];
-        let mut seen = BTreeSet::new();
-        while let Some(addr) = todo.pop() {
-            if !seen.insert(addr) {
-                continue;
-            }
-            let Some((name, calls)) = self.by_start.get(&addr) else {
-                // no function starts there: ROM (no symbols) or a bad target
-                reached.insert(addr, format!("{addr:#010x}"));
-                continue;
-            };
-            reached.insert(addr, name.clone());
-            for call in calls {
-                match *call {
-                    Call::To(target) => todo.push(target),
-                    Call::Unknown(at) => {
-                        return Err(format!("{name} makes an indirect call at {at:#010x} that the check cannot follow"))
-                    }
-                }
-            }
-        }
-        Ok(reached)
-    }
-}
-
-/// Reads 32-bit words (literal pool entries) from the loaded sections.
-struct Words<'a, 'd> {
-    file: &'a object::File<'d>,
-}
-
-impl Words<'_, '_> {
-    fn at(&self, addr: u32) -> Option<u32> {
-        let section =
-            self.file.sections().find(|s| (s.address()..s.address() + s.size()).contains(&u64::from(addr)))?;
-        let data = section.data().ok()?;
-        let offset = usize::try_from(u64::from(addr) - section.address()).ok()?;
-        let bytes: [u8; 4] = data.get(offset..offset + 4)?.try_into().ok()?;
-        Some(u32::from_le_bytes(bytes))
-    }
-}
-
-/// Whether the jump table at `table` holds addresses inside `body`: its
-/// entries, read until the first that is not, must be at least one.
-fn table_within(word: impl Fn(u32) -> Option<u32>, table: u32, body: &Range<u32>) -> bool {
-    let entries = (0u32..)
-        .map_while(|i| word(table.checked_add(i.checked_mul(4)?)?))
-        .take_while(|target| body.contains(target))
-        .count();
-    entries > 0
-}
-
-/// `40100230:\taddi\ta1, a1, -16` -> (address, mnemonic, operands).
-fn parse_instruction(line: &str) -> Option<(u32, &str, &str)> {
-    let (addr, rest) = line.trim_start().split_once(':')?;
-    let addr = parse_hex(addr)?;
-    let mut parts = rest.trim().splitn(2, char::is_whitespace);
-    let mnemonic = parts.next().filter(|m| !m.is_empty())?;
-    Some((addr, mnemonic, parts.next().unwrap_or("").trim()))
-}
-
-fn parse_hex(text: &str) -> Option<u32> {
-    u32::from_str_radix(text, 16).ok()
-}
-
-/// Stores, branches, jumps and special-register writes read their first
-/// operand; the other instructions with a register first write it.
-fn writes_first_operand(mnemonic: &str) -> bool {
-    let m = mnemonic.trim_end_matches(".n");
-    let reads = m.starts_with('b')
-        || matches!(m, "s8i" | "s16i" | "s32i" | "s32e" | "s32ri" | "s32c1i" | "wsr" | "wur" | "j" | "jx" | "ret")
-        || m.starts_with("wsr.")
-        || m.starts_with("call");
-    !reads
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn instructions_parse_with_their_operands() {
-        assert_eq!(parse_instruction("40100230:\taddi\ta1, a1, -16"), Some((0x4010_0230, "addi", "a1, a1, -16")));
-        assert_eq!(
-            parse_instruction("40100244:\tl32r\ta0, 40100100 <foo+0x4>"),
-            Some((0x4010_0244, "l32r", "a0, 40100100 <foo+0x4>"))
-        );
-        assert_eq!(parse_instruction("40100250:\tret.n"), Some((0x4010_0250, "ret.n", "")));
-        assert_eq!(parse_instruction("Disassembly of section .text:"), None);
-    }
-
-    /// Two functions in IRAM, one in flash, a jump table in DRAM.
-    fn sample(isr: &str) -> Functions {
-        let extents = BTreeMap::from([
-            (0x4010_0100, (0x4010_0140, "isr".to_string())),
-            (0x4010_0200, (0x4010_0210, "helper".to_string())),
-            (0x4021_0000, (0x4021_0010, "in_flash".to_string())),
-        ]);
-        let words = BTreeMap::from([
-            (0x4010_0000u32, 0x4010_0200u32), // literal: helper
-            (0x4010_0004, 0x4021_0000),       // literal: in_flash
-            (0x4010_0008, 0x3FFE_8000),       // literal: the jump table
-            (0x3FFE_8000, 0x4010_0110),       // table entries, inside isr
-            (0x3FFE_8004, 0x4010_0120),
-        ]);
-        let text = format!("{isr}\n40100200:\tret.n\n40210000:\tret.n\n");
-        Functions::from_disassembly(&text, &extents, |a| words.get(&a).copied())
-    }
-
-    fn reach(f: &Functions) -> Result<Vec<String>, String> {
-        f.reach_from("isr").map(|r| r.into_values().collect())
-    }
-
-    #[test]
-    fn calls_through_literals_are_followed() {
-        let f = sample("40100100:\tl32r\ta0, 40100000 <x>\n40100103:\tcallx0\ta0\n40100106:\tret.n");
-        assert_eq!(reach(&f).unwrap(), ["isr", "helper"]);
-        let f = sample("40100100:\tl32r\ta0, 40100004 <x>\n40100103:\tcallx0\ta0");
-        assert_eq!(reach(&f).unwrap(), ["isr", "in_flash"]);
-    }
-
-    #[test]
-    fn a_call_through_an_overwritten_register_cannot_be_followed() {
-        let f = sample("40100100:\tl32r\ta0, 40100000 <x>\n40100103:\tl32i.n\ta0, a1, 0\n40100105:\tcallx0\ta0");
-        assert!(reach(&f).unwrap_err().contains("indirect call at 0x40100105"));
-    }
-
-    #[test]
-    fn a_switch_through_a_jump_table_stays_in_the_function() {
-        let switch = "40100100:\tl32r\ta7, 40100008 <x>\n40100103:\taddx4\ta10, a10, a7\n40100106:\tl32i.n\ta10, a10, 0\n40100108:\tjx\ta10";
-        assert_eq!(reach(&sample(switch)).unwrap(), ["isr"]);
-        let not_a_table = "40100100:\tl32r\ta7, 40100000 <x>\n40100103:\taddx4\ta10, a10, a7\n40100106:\tl32i.n\ta10, a10, 0\n40100108:\tjx\ta10";
-        assert!(reach(&sample(not_a_table)).is_err());
-    }
-
-    #[test]
-    fn a_tail_jump_out_of_the_function_is_a_call() {
-        let f = sample("40100100:\tj\t40210000 <in_flash>\n40100103:\tj\t40100100 <isr>");
-        assert_eq!(reach(&f).unwrap(), ["isr", "in_flash"]);
-    }
-
-    #[test]
-    fn stores_and_branches_do_not_overwrite_their_first_register() {
-        assert!(!writes_first_operand("s32i.n"));
-        assert!(!writes_first_operand("beqz"));
-        assert!(!writes_first_operand("wsr.intenable"));
-        assert!(writes_first_operand("l32i.n"));
-        assert!(writes_first_operand("mov.n"));
-        assert!(writes_first_operand("addi"));
-    }
 
     #[test]
     fn the_image_must_end_before_the_logs_and_the_settings_sectors() {

@@ -11,7 +11,9 @@
 //!    patched in, linked through `xtensa/xt-link.sh` (GNU as, the literal
 //!    fix) with our `memory.x`, `exception.x` and `rom-functions.x`;
 //! 4. the checks of [`crate::elf`] (entry point, undefined symbols,
-//!    vectors, interrupt code in IRAM, budgets), each failing the build;
+//!    vectors, interrupt code in IRAM, the stack's depth, budgets), each
+//!    failing the build, and the stack check's negative test (a deeper
+//!    copy of the image it must refuse, [`crate::stack::refuses_deeper`]);
 //! 5. esptool's `elf2image` with the flash parameters, and `image-info`,
 //!    which must report them ([`crate::esptool`]).
 use std::fs;
@@ -19,7 +21,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use crate::esptool::FlashParams;
-use crate::{elf, esptool, patch};
+use crate::{elf, esptool, patch, stack};
 
 const USAGE: &str = "\
 usage: cargo fw-image [--clippy] [--flash-mode M] [--flash-freq F] [--flash-size S]
@@ -29,7 +31,7 @@ named in xtensa/nightly and writes
   target/image/paperbot.elf          the linked firmware
   target/image/paperbot-0x00000.bin  the boot image (flash offset 0x00000)
   target/image/paperbot-0x10000.bin  the flash-mapped code (offset 0x10000)
-then checks the ELF and prints the memory budget.
+then checks the ELF and prints the memory and stack budgets.
 
   --clippy        first run clippy (the panic lints) on the board code and
                   the firmware, for the same target, warnings as errors
@@ -110,6 +112,7 @@ pub fn main(args: &[String]) -> Result<(), String> {
     println!("== checks ({})", rel(&root, &elf_path));
     let report = elf::check(&elf_path)?;
     print!("{report}");
+    println!("  {}", stack::refuses_deeper(&elf_path, &work.join("paperbot-deeper.elf"))?);
 
     println!("== esptool");
     esptool::write_images(&root, &elf_path, &work.join("paperbot-"), &flash)?;
@@ -117,6 +120,20 @@ pub fn main(args: &[String]) -> Result<(), String> {
         "\nflash with:\n  esptool --chip esp8266 write-flash --flash-mode {} --flash-freq {} --flash-size {} \\\n    0x00000 target/image/paperbot-0x00000.bin 0x10000 target/image/paperbot-0x10000.bin",
         flash.mode, flash.freq, flash.size
     );
+    Ok(())
+}
+
+/// `fw-check [ELF]`: the checks of [`crate::elf`] on an ELF already built
+/// (`target/image/paperbot.elf` unless named), without building.
+pub fn check_only(args: &[String]) -> Result<(), String> {
+    let elf_path = match args {
+        [] => repo_root().join("target/image/paperbot.elf"),
+        [path] if !path.starts_with('-') => PathBuf::from(path),
+        _ => return Err("usage: fw-check [ELF]".into()),
+    };
+    print!("{}", elf::check(&elf_path)?);
+    let copy = elf_path.with_file_name("paperbot-deeper.elf");
+    println!("  {}", stack::refuses_deeper(&elf_path, &copy)?);
     Ok(())
 }
 

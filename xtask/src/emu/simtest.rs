@@ -7,7 +7,9 @@
 //! wheels; the loop runs at its configured rate; and after each
 //! wire fault (a chip that NACKs, SDA held low, a lidar that never gets
 //! ready) the image recovers: the fault is counted and the sensor reads
-//! again. Prints `N passed, N failed`; fails when any check does.
+//! again; and the stack's low-water mark stays within the static bound of
+//! `cargo fw-image`'s stack check. Prints `N passed, N failed`; fails when
+//! any check does.
 
 use std::path::Path;
 
@@ -15,6 +17,7 @@ use super::events::{summarize, Events};
 use super::qemu::Board;
 use super::selftest::{config_source, Expect, Report};
 use super::sim::{self, SimOptions, SimRun};
+use crate::stack;
 
 const MS: u64 = 1_000_000;
 /// The bar of the scripted drive: estimate error at the end, mm.
@@ -149,6 +152,26 @@ pub fn run(root: &Path, board: &Board, work: &Path, flash: &Path) -> Result<(), 
     );
     let work_ips = drive.cost.work_per_second();
     r.check("the loop's cost is measured", work_ips > 0.0, format!("{:.3} M instructions/s of work", work_ips / 1e6));
+    // the stack: the board's low-water mark over bring-up, the power-up
+    // localization and the drive, against the static bound of cargo
+    // fw-image's stack check (xtask/src/stack.rs), which it must not pass
+    let low = Events::parse(&std::fs::read_to_string(&drive.events).map_err(|e| e.to_string())?)?
+        .others
+        .iter()
+        .find_map(|(_, e)| u32::from_str_radix(e.strip_prefix("stack-low 0x")?, 16).ok());
+    let bound = stack::worst_case(&root.join("target/image/paperbot.elf"))?;
+    let used = low.map(|low| stack::STACK_TOP.saturating_sub(low));
+    r.check(
+        "the stack stays within the static bound (the board's low-water mark)",
+        used.is_some_and(|used| used <= bound),
+        match (low, used) {
+            (Some(low), Some(used)) => format!(
+                "{used} B used, down to {low:#010x}; static bound {bound} B; the ROM's flash parameters end at {:#010x}",
+                stack::STACK_FLOOR
+            ),
+            _ => "no stack-low event".into(),
+        },
+    );
 
     // the deadman: an untimed raw command, then silence
     let deadman = go(
