@@ -46,8 +46,8 @@ use crate::config;
 use crate::config::timing::LOOP_HZ;
 use crate::control::goto::position_steerable;
 use crate::math::{Angle, Length};
-use crate::model::locate::turns::Turn;
 use crate::model::locate::refine::Refine;
+use crate::model::locate::turns::Turn;
 use crate::model::locate::{Fix, LocateError, Readings, Search, MAX_VIEWS};
 use crate::model::measurement::{Arena, LidarId};
 
@@ -206,8 +206,14 @@ struct Sweep {
 
 impl Sweep {
     /// At the first view, nothing swept.
-    const START: Sweep =
-        Sweep { at: 0, edges: [0, 0], edge_views: [0, 0], edge_fronts: [None, None], blocked: [false, false], steps: 1 };
+    const START: Sweep = Sweep {
+        at: 0,
+        edges: [0, 0],
+        edge_views: [0, 0],
+        edge_fronts: [None, None],
+        blocked: [false, false],
+        steps: 1,
+    };
 }
 
 impl Default for Survey {

@@ -18,7 +18,7 @@ use crate::model::measurement::Arena;
 
 /// A heading within 30 degrees of a wall runs along it: the sine of 30
 /// degrees in Q30 (driving 100 mm moves the centre off it 50 mm at most).
-const ALONG_WALL: i64 = 1 << 29;
+const ALONG_WALL: i64 = 277_904_850;
 
 /// What a turn about a centre needs first.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]

@@ -74,7 +74,9 @@ fn front_needed_mm(ahead: Ahead) -> i32 {
 /// ([`room_to_turn`]). Nearer: back up to it (at most
 /// [`config::locate::MAX_BACK_UP_MM`]: behind is unseen). Farther: drive
 /// forward until a wall touching the body's back would be the reach behind
-/// the turning centre, but not past the aim. No front reading: stay.
+/// the turning centre, but not past the aim, nor nearer the wall ahead than
+/// [`SLANT_CLEAR_MM`] (a wall met at a slant meets a front corner first).
+/// No front reading: stay.
 pub fn positioning_mm(front: Option<Length>) -> i32 {
     let Some(front) = front else { return 0 };
     let aim = front_needed_mm(Ahead::Slanted).saturating_add(config::locate::POSITION_SLACK_MM);
@@ -92,10 +94,11 @@ pub fn positioning_mm(front: Option<Length>) -> i32 {
 /// [`config::geometry::BODY_HALF_WIDTH`] to the side of the beam, that
 /// far along it (`half width x tan(incidence)`), plus the margin and the
 /// wheels' speed error over the drive ([`config::locate::POSITION_SLACK_MM`]).
-/// Issue #29's hard world: drives to the turning room's aim met walls at
-/// 66 degrees.
-const SLANT_CLEAR_MM: i32 = {
-    let along = (config::geometry::BODY_HALF_WIDTH.0 as f64 / 65536.0) * crate::math::tan_f64(config::locate::GLANCING_DEG);
+/// Issue #29's hard world: drives to the turning room's aim (128 mm) met
+/// walls at 66 degrees. 53 mm x tan 75 degrees, 20 and 20: 237 mm.
+pub const SLANT_CLEAR_MM: i32 = {
+    let along =
+        (config::geometry::BODY_HALF_WIDTH.0 as f64 / 65536.0) * crate::math::tan_f64(config::locate::GLANCING_DEG);
     along as i32 + config::locate::ROOM_MARGIN_MM + config::locate::POSITION_SLACK_MM
 };
 

@@ -12,7 +12,7 @@
 //! at headings between its two views', in proportion to its ticks.
 //!
 //! # Units
-//! A parameter is stored in its fixed-point LSB ([`UNITS`]: a position or
+//! A parameter is stored in its fixed-point LSB ([`unit`]: a position or
 //! the lever in Q16 mm, an angle in [`Angle`] LSB, a rate in angle LSB a
 //! tick) and stepped in its unit (1 mm, 1 mrad, [`RATE_UNIT`]). A residual
 //! is Q12 sigmas, a row's derivatives Q12 sigmas a unit.
@@ -46,12 +46,14 @@ pub const MRAD: i64 = Angle::from_radians_f64(0.001).0 as i64;
 /// 33 ticks at `goto::TURN_MRAD_S`), angle LSB a tick.
 pub const RATE_UNIT: i64 = MRAD / 32;
 const MM: i64 = 1 << 16;
-/// Each parameter's unit in its LSB.
-pub const UNITS: Params = {
-    let mut u = [MRAD; MAX_PARAMS];
-    (u[PX], u[PY], u[LEVER], u[CW], u[CCW]) = (MM, MM, MM, RATE_UNIT, RATE_UNIT);
-    u
-};
+/// Parameter `k`'s unit in its LSB.
+pub fn unit(k: usize) -> i64 {
+    match k {
+        PX | PY | LEVER => MM,
+        CW | CCW => RATE_UNIT,
+        _ => MRAD,
+    }
+}
 
 /// Q12: a residual's and a derivative's scale (sigmas).
 pub const ONE_SIGMA: i64 = 1 << 12;
@@ -167,6 +169,22 @@ fn mul_shr(a: i64, b: i64, s: u32) -> i64 {
     mul_wide(fit(a), fit(b)) >> s
 }
 
+/// Which rows a pass's slice makes: the `from`-th to before the `end`-th.
+struct Slice {
+    index: usize,
+    from: usize,
+    end: usize,
+}
+
+impl Slice {
+    /// The next row is in the slice (counted either way).
+    fn take(&mut self) -> bool {
+        let take = self.index >= self.from && self.index < self.end;
+        self.index = self.index.saturating_add(1);
+        take
+    }
+}
+
 /// Where a reading's heading comes from: one view's, or a turn's two
 /// views' weighed by how far through the turn it came (Q16).
 #[derive(Clone, Copy)]
@@ -197,15 +215,8 @@ impl Model<'_> {
     /// readings), then the priors; the derivatives only when asked for
     /// (the cost needs none). True when the last row was among them.
     pub fn rows(&self, p: &Params, derivatives: bool, from: usize, count: usize, mut f: impl FnMut(&Row)) -> bool {
-        let end = from.saturating_add(count);
-        let mut index = 0usize;
         // a row is made only when its index is in the slice
-        let mut emit = |make: &dyn Fn() -> Row| {
-            if index >= from && index < end {
-                f(&make());
-            }
-            index = index.saturating_add(1);
-        };
+        let mut slice = Slice { index: 0, from, end: from.saturating_add(count) };
         let get = |k: usize| p.get(k).copied().unwrap_or(0);
         let views = self.views.get(..MAX_VIEWS).unwrap_or(self.views);
         for (i, v) in views.iter().enumerate() {
@@ -213,14 +224,16 @@ impl Model<'_> {
             let at = At { theta: get(k), from: (k, 1 << 16), to: (k, 0) };
             for (id, z) in [(LidarId::Front, v.front), (LidarId::Right, v.right)] {
                 if let Some(z) = z {
-                    emit(&|| self.lidar(p, at, id, z, derivatives));
+                    if slice.take() {
+                        f(&self.lidar(p, at, id, z, derivatives));
+                    }
                 }
             }
-            emit(&|| {
+            if slice.take() {
                 let predicted = get(k).saturating_add(get(BIAS));
                 let miss = i64::from(v.heading.diff(Angle(predicted as u32)));
-                mixed(miss, VIEW_PRIOR, &[k, BIAS], -1)
-            });
+                f(&mixed(miss, VIEW_PRIOR, &[k, BIAS], -1));
+            }
         }
         for (j, t) in self.turns.iter().enumerate().take(views.len().saturating_sub(1)) {
             let (from, to) = (HEADING.saturating_add(j), HEADING.saturating_add(j).saturating_add(1));
@@ -228,15 +241,13 @@ impl Model<'_> {
             let ticks = i64::from(t.ticks);
             // a reading's share of the turn: its tick over the turn's, Q16
             let per_tick = quotient(1, u64::from(t.ticks.max(1)), 32);
-            if ticks > 0 {
-                emit(&|| {
-                    let (rate, way) = if t.clockwise { (get(CW), 1) } else { (get(CCW).saturating_neg(), -1) };
-                    let miss = b.saturating_sub(a).saturating_sub(rate.saturating_mul(ticks));
-                    let d = mul_shr(MRAD, TURN_INV, 28);
-                    let dr = mul_shr(ticks.saturating_mul(RATE_UNIT), TURN_INV, 28).saturating_mul(-way);
-                    let rate_col = if t.clockwise { CW } else { CCW };
-                    Row::new(mul_shr(miss, TURN_INV, 28), Loss::Robust).with(to, d).with(from, -d).with(rate_col, dr)
-                });
+            if ticks > 0 && slice.take() {
+                let (rate, way) = if t.clockwise { (get(CW), 1) } else { (get(CCW).saturating_neg(), -1) };
+                let miss = b.saturating_sub(a).saturating_sub(rate.saturating_mul(ticks));
+                let d = mul_shr(MRAD, TURN_INV, 28);
+                let dr = mul_shr(ticks.saturating_mul(RATE_UNIT), TURN_INV, 28).saturating_mul(-way);
+                let rate_col = if t.clockwise { CW } else { CCW };
+                f(&Row::new(mul_shr(miss, TURN_INV, 28), Loss::Robust).with(to, d).with(from, -d).with(rate_col, dr));
             }
             for s in t.samples() {
                 let done = (u64::from(s.tick).saturating_mul(per_tick) >> 16).min(1 << 16) as i64;
@@ -244,24 +255,28 @@ impl Model<'_> {
                 let at = At { theta, from: (from, (1 << 16) - done), to: (to, done) };
                 for id in [LidarId::Front, LidarId::Right] {
                     if let Some(z) = s.distance(id) {
-                        emit(&|| self.lidar(p, at, id, z, derivatives));
+                        if slice.take() {
+                            f(&self.lidar(p, at, id, z, derivatives));
+                        }
                     }
                 }
             }
         }
-        emit(&|| {
+        if slice.take() {
             let bias = i64::from(Angle(get(BIAS) as u32).diff(Angle::ZERO));
-            mixed(bias, BIAS_PRIOR, &[BIAS], 1)
-        });
-        emit(&|| {
+            f(&mixed(bias, BIAS_PRIOR, &[BIAS], 1));
+        }
+        if slice.take() {
             let lever = get(LEVER).saturating_sub(LEVER_MEAN);
-            Row::new(mul_shr(lever, LEVER_INV, 28), Loss::Square(0)).with(LEVER, mul_shr(MM, LEVER_INV, 28))
-        });
+            f(&Row::new(mul_shr(lever, LEVER_INV, 28), Loss::Square(0)).with(LEVER, mul_shr(MM, LEVER_INV, 28)));
+        }
         let last = HEADING.saturating_add(views.len().saturating_sub(1));
         for on_x in [true, false] {
-            emit(&|| self.near(p, last, on_x));
+            if slice.take() {
+                f(&self.near(p, last, on_x));
+            }
         }
-        index <= end
+        slice.index <= slice.end
     }
 
     /// The prior that the last view stays near the search's place: along

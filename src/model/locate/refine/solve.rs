@@ -7,7 +7,7 @@
 //! with every factor held within `i32` by its scale; each column divides
 //! once (its pivot's reciprocal). A step costs about one pass's slice.
 
-use super::rows::{Loss, Row, MAX_PARAMS, ROBUST, UNITS};
+use super::rows::{unit, Loss, Row, MAX_PARAMS, ROBUST};
 use crate::math::{div_i64, isqrt64, mul_wide, quotient};
 
 /// Q24: the scaled system's one.
@@ -133,7 +133,7 @@ impl Sums {
             if *used.get(k)? {
                 // delta in units, Q16 (y is Q12, scaled back by 2^-shift)
                 let delta = scale(i64::from(*y.get(k)?) << 4, *shift.get(k)?);
-                let lsb = mul_wide(delta.clamp(-(1 << 30), 1 << 30) as i32, *UNITS.get(k)? as i32) >> 16;
+                let lsb = mul_wide(delta.clamp(-(1 << 30), 1 << 30) as i32, unit(k) as i32) >> 16;
                 *q.get_mut(k)? = q.get(k)?.saturating_add(lsb);
             }
         }
