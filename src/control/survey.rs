@@ -126,6 +126,8 @@ enum Phase {
     Turn,
     Settle,
     Search(Search),
+    /// The search's answer, to be refined from the next tick.
+    Searched(Fix),
     /// The search's fix refined with every reading
     /// ([`crate::model::locate::refine`]).
     Refine(Refine),
@@ -280,6 +282,11 @@ impl Survey {
     /// far as it got, reported uncertain, while refining; else none.
     pub fn out_of_time(&self) -> Result<Fix, Failure> {
         match &self.phase {
+            Phase::Searched(fix) => {
+                let mut fix = *fix;
+                fix.untrusted = true;
+                Ok(fix)
+            }
             Phase::Refine(refine) => {
                 let mut fix = refine.refined_fix();
                 fix.untrusted = true;
@@ -365,6 +372,10 @@ impl Survey {
                 None => Action::Stand,
                 Some(result) => self.searched(result.map_err(Failure::from)),
             },
+            Phase::Searched(fix) => {
+                let fix = *fix;
+                self.refine(fix)
+            }
             Phase::Refine(refine) => {
                 // (the fields, not `views()` and `turns()`: the phase is borrowed)
                 let views = self.views.get(..self.count).unwrap_or(&[]);
@@ -500,8 +511,9 @@ impl Survey {
             // (the fix's heading is the compass's, within goto's limit)
             Ok(fix) if (!fix.ambiguous && position_steerable(fix.sigma_x, fix.sigma_y, 1)) || last_view => {
                 if config::refine::ENABLED {
-                    let refine = Refine::new(fix, self.views(), self.turns());
-                    self.enter(Phase::Refine(refine))
+                    // refined from the next tick (not here, deep in the
+                    // search's calls: `Survey::refine`)
+                    self.enter(Phase::Searched(fix))
                 } else {
                     Action::Done(Ok(fix))
                 }
@@ -509,6 +521,16 @@ impl Survey {
             Err(e) if last_view => Action::Done(Err(e)),
             _ => self.turn(),
         }
+    }
+
+    /// The search's fix refined next ([`Phase::Refine`]). Out of line, and
+    /// from a tick: its 1.1 kB are on the robot's stack only here, not in
+    /// the search's calls (`cargo fw-image`'s stack check).
+    #[inline(never)]
+    fn refine(&mut self, fix: Fix) -> Action {
+        self.phase = Phase::Refine(Refine::new(fix, self.views(), self.turns()));
+        self.ticks = 0;
+        Action::Stand
     }
 
     fn enter(&mut self, phase: Phase) -> Action {

@@ -77,34 +77,42 @@ impl Estimator {
         // a weight's cost: 2 ln(w_max / w) ~ 2 ln 2 per bit (Q8: 355)
         let bits = |w: u32| 32 - w.max(1).leading_zeros() as i32;
         let top = seeds.iter().map(|s| bits(s.weight)).max().unwrap_or(0);
-        let mut filters = [(Filter::new(Pose::default()), 0); cfg::MAX_HYPOTHESES];
+        if seeds.is_empty() {
+            return;
+        }
+        // written in place (not built beside the hypotheses and copied: four
+        // filters are 1.2 kB on the robot's stack, on its deepest call,
+        // `cargo fw-image`'s stack check)
         let mut n = 0;
-        for (slot, s) in filters.iter_mut().zip(seeds.iter()) {
-            let mut f = Filter::new(s.pose);
-            f.p.set(X, X, var(s.sigma_x));
-            f.p.set(Y, Y, var(s.sigma_y));
-            f.p.set(T, T, R_COMPASS);
-            f.p.condition();
-            f.keep_in(&self.bounds);
-            *slot = (f, (top - bits(s.weight)).saturating_mul(355));
+        for ((h, c), s) in self.hyps.iter_mut().zip(self.costs.iter_mut()).zip(seeds.iter()) {
+            *h = Filter::new(s.pose);
+            h.p.set(X, X, var(s.sigma_x));
+            h.p.set(Y, Y, var(s.sigma_y));
+            h.p.set(T, T, R_COMPASS);
+            h.p.condition();
+            h.keep_in(&self.bounds);
+            *c = (top - bits(s.weight)).saturating_mul(355);
             n += 1;
         }
-        if let Some(seeded) = filters.get(..n) {
-            if !seeded.is_empty() {
-                self.start(seeded, Tracking::Located);
-            }
-        }
+        self.started(n, Tracking::Located);
     }
 
     fn start(&mut self, hyps: &[(Filter, i32)], tracking: Tracking) {
+        for ((h, c), (f, cost)) in self.hyps.iter_mut().zip(self.costs.iter_mut()).zip(hyps.iter()) {
+            (*h, *c) = (*f, *cost);
+        }
+        self.started(hyps.len(), tracking);
+    }
+
+    /// The first `live` hypotheses and their costs are set: each a new id,
+    /// and the tracker starts over from them.
+    fn started(&mut self, live: usize, tracking: Tracking) {
         self.pivot.interrupt();
-        for (((h, c), id), (f, cost)) in
-            self.hyps.iter_mut().zip(self.costs.iter_mut()).zip(self.ids.iter_mut()).zip(hyps.iter())
-        {
-            (*h, *c, *id) = (*f, *cost, self.next_id);
+        for id in self.ids.iter_mut().take(live) {
+            *id = self.next_id;
             self.next_id = self.next_id.wrapping_add(1);
         }
-        self.live = hyps.len().clamp(1, cfg::MAX_HYPOTHESES);
+        self.live = live.clamp(1, cfg::MAX_HYPOTHESES);
         self.tracking = tracking;
         self.evidence = EvidenceSet::FRESH;
         self.slack = CATCH_UP_STANDING_Q16;

@@ -75,11 +75,12 @@ const CONVERGED: i64 = q24(0.05);
 /// A turn the compass shows shorter than this was blocked: no rate from it.
 const BLOCKED: i64 = Angle::from_degrees_f64(BLOCKED_TURN_DEG as f64).0 as i64;
 const NEAR_INV: i64 = ((1u64 << 40) as f64 / (cfg::NEAR_SIGMA_MM * 65536.0)) as i64;
+const NEAR_SIGMA: i32 = Length::from_mm_f64(cfg::NEAR_SIGMA_MM).0;
 
 /// Starts a place.
 const STARTS: usize = cfg::START_HEADINGS_DEG.len() * cfg::START_LEVERS_MM.len() * cfg::START_AXIS_SHARES.len();
 /// Ends kept for the rival's cost.
-const KEPT: usize = 8;
+const KEPT: usize = 4;
 
 /// The refined pose, and whether the fit vouches for it.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
@@ -172,11 +173,7 @@ impl Refine {
             return (0, 0, NEAR_INV);
         };
         let spread = c.sigma_x.0.max(c.sigma_y.0);
-        let inv = if spread > Length::from_mm_f64(cfg::NEAR_SIGMA_MM).0 {
-            div_i64(1 << 40, i64::from(spread)).unwrap_or(NEAR_INV)
-        } else {
-            NEAR_INV
-        };
+        let inv = if spread > NEAR_SIGMA { div_i64(1 << 40, i64::from(spread)).unwrap_or(NEAR_INV) } else { NEAR_INV };
         (c.x.to_length().0.into(), c.y.to_length().0.into(), inv)
     }
 
@@ -203,22 +200,22 @@ impl Refine {
         let (place, choice) = (self.start / STARTS, self.start % STARTS);
         let (levers, shares) = (cfg::START_LEVERS_MM.len(), cfg::START_AXIS_SHARES.len());
         let (heading_at, rest) = (choice / (levers * shares), choice % (levers * shares));
-        let lever_mm = cfg::START_LEVERS_MM.get(rest / shares).copied().unwrap_or(0.0);
+        let lever = START_LEVERS.get(rest / shares).copied().unwrap_or(0);
         let share = if cfg::START_AXIS_SHARES.get(rest % shares) == Some(&true) { Share::Axis } else { Share::Nearest };
         let (nx, ny, inv) = self.place(place);
         let model = Model { arena, views, turns, share, near: (nx, ny, inv) };
         let turned = START_TURNS.get(heading_at).copied().unwrap_or(0);
-        let mut fit = match self.fit {
-            Some(fit) => fit,
-            None => Fit::new(self.start_params(views, (nx, ny), turned, lever_mm)),
-        };
+        // the fit in place (a copy would be 0.7 kB more of the robot's stack)
+        if self.fit.is_none() {
+            self.fit = Some(Fit::new(self.start_params(views, (nx, ny), turned, lever)));
+        }
+        let fit = self.fit.as_mut()?;
         if fit.pass(&model) && fit.next(model.params()) {
             let margin = if turned == 0 { 0 } else { AWAY_MARGIN };
-            self.keep(fit.end(views.len(), margin));
+            let end = fit.end(views.len(), margin);
+            self.keep(end);
             self.fit = None;
             self.start = self.start.saturating_add(1);
-        } else {
-            self.fit = Some(fit);
         }
         None
     }
@@ -226,11 +223,10 @@ impl Refine {
     /// A start's parameters: the last view at the place `at` (Q16 mm) and
     /// the fix's heading turned by `turned`, the earlier views at the
     /// compass's turns from it, the pivot `lever_mm` behind.
-    fn start_params(&self, views: &[Readings], at: (i64, i64), turned: i32, lever_mm: f64) -> Params {
+    fn start_params(&self, views: &[Readings], at: (i64, i64), turned: i32, lever: i64) -> Params {
         let mut p: Params = [0; MAX_PARAMS];
         let last = views.len().saturating_sub(1);
         let theta = i64::from(self.fix.pose.theta.0).saturating_add(i64::from(turned));
-        let lever = i64::from(Length::from_mm_f64(lever_mm).0);
         let (s, c) = sin_cos(Angle(theta as u32));
         p[PX] = at.0.saturating_sub(lever.saturating_mul(i64::from(c)) >> 30);
         p[PY] = at.1.saturating_sub(lever.saturating_mul(i64::from(s)) >> 30);
@@ -285,6 +281,19 @@ impl Refine {
     }
 }
 
+/// The starts' levers, Q16 mm.
+// evaluated by the compiler: an index out of bounds fails the build
+#[allow(clippy::indexing_slicing)]
+const START_LEVERS: [i64; cfg::START_LEVERS_MM.len()] = {
+    let mut t = [0; cfg::START_LEVERS_MM.len()];
+    let mut i = 0;
+    while i < t.len() {
+        t[i] = Length::from_mm_f64(cfg::START_LEVERS_MM[i]).0 as i64;
+        i += 1;
+    }
+    t
+};
+
 /// The starts' headings off the fix's, angle LSB.
 // evaluated by the compiler: an index out of bounds fails the build
 #[allow(clippy::indexing_slicing)]
@@ -318,18 +327,17 @@ impl Fit {
 
     /// The pass's next rows: true when it is done.
     fn pass(&mut self, model: &Model) -> bool {
-        let at = if self.stage == Stage::Trial { self.trial } else { self.p };
+        let at = if self.stage == Stage::Trial { &self.trial } else { &self.p };
         let normal = self.stage == Stage::Normal;
-        let (mut cost, mut readings, mut sums) = (self.pass_cost, self.pass_readings, self.sums);
-        let done = model.rows(&at, normal, usize::from(self.row), cfg::ROWS_PER_STEP, |row| {
+        let (cost, readings, sums) = (&mut self.pass_cost, &mut self.pass_readings, &mut self.sums);
+        let done = model.rows(at, normal, usize::from(self.row), cfg::ROWS_PER_STEP, |row| {
             if normal {
                 sums.add(row);
             } else {
-                cost = cost.saturating_add(solve::cost(row));
-                readings = readings.saturating_add(u32::from(row.loss == Loss::Robust));
+                *cost = cost.saturating_add(solve::cost(row));
+                *readings = readings.saturating_add(u32::from(row.loss == Loss::Robust));
             }
         });
-        (self.pass_cost, self.pass_readings, self.sums) = (cost, readings, sums);
         self.row = self.row.saturating_add(cfg::ROWS_PER_STEP as u16);
         done
     }
