@@ -67,11 +67,12 @@ const fn q24(v: f64) -> i64 {
 }
 const AWAY_MARGIN: i64 = q24(cfg::AWAY_MARGIN);
 const FIT_LIMIT: i64 = q24(cfg::FIT_LIMIT);
+const WELL_FIT: i32 = q24(cfg::WELL_FIT) as i32;
 const RIVAL_GAP: i64 = q24(cfg::RIVAL_GAP);
 const RIVAL_ANGLE: i32 = Angle::from_degrees_f64(cfg::RIVAL_DEG).0 as i32;
 /// A step that lowers the cost by less than this ends the start (Q24: a
 /// thousandth of a sigma squared).
-const CONVERGED: i64 = q24(0.05);
+const CONVERGED: i64 = q24(0.5);
 /// A turn the compass shows shorter than this was blocked: no rate from it.
 const BLOCKED: i64 = Angle::from_degrees_f64(BLOCKED_TURN_DEG as f64).0 as i64;
 const NEAR_INV: i64 = ((1u64 << 40) as f64 / (cfg::NEAR_SIGMA_MM * 65536.0)) as i64;
@@ -158,13 +159,24 @@ pub struct Refine {
     ends: [Option<End>; KEPT],
     /// An end was dropped from `ends` (the rival is at least the dearest kept).
     dropped: bool,
+    /// The best cost a reading of this place's starts at the fix's heading
+    /// (Q24; `i32::MAX` before one ended).
+    compass_fit: i32,
 }
 
 impl Refine {
     /// The refinement of `fix`, found from `views` and `turns` (turn `j`
     /// between views `j` and `j + 1`).
     pub fn new(fix: Fix, views: &[Readings], turns: &[Turn]) -> Refine {
-        Refine { fix, rates: compass_rates(views, turns), start: 0, fit: None, ends: [None; KEPT], dropped: false }
+        Refine {
+            fix,
+            rates: compass_rates(views, turns),
+            start: 0,
+            fit: None,
+            ends: [None; KEPT],
+            dropped: false,
+            compass_fit: i32::MAX,
+        }
     }
 
     /// Where to stay near: a place of the fix (Q16 mm) and `2^40 / sigma`.
@@ -205,14 +217,25 @@ impl Refine {
         let (nx, ny, inv) = self.place(place);
         let model = Model { arena, views, turns, share, near: (nx, ny, inv) };
         let turned = START_TURNS.get(heading_at).copied().unwrap_or(0);
-        // the fit in place (a copy would be 0.7 kB more of the robot's stack)
         if self.fit.is_none() {
+            if choice == 0 {
+                self.compass_fit = i32::MAX;
+            }
+            // the compass's heading fits this place well: no more starts here
+            if self.compass_fit <= WELL_FIT {
+                self.start = self.start.saturating_add(1);
+                return None;
+            }
+            // the fit in place (a copy would be 0.7 kB more of the robot's stack)
             self.fit = Some(Fit::new(self.start_params(views, (nx, ny), turned, lever)));
         }
         let fit = self.fit.as_mut()?;
         if fit.pass(&model) && fit.next(model.params()) {
             let margin = if turned == 0 { 0 } else { AWAY_MARGIN };
             let end = fit.end(views.len(), margin);
+            if turned == 0 {
+                self.compass_fit = self.compass_fit.min(end.per_reading);
+            }
             self.keep(end);
             self.fit = None;
             self.start = self.start.saturating_add(1);
