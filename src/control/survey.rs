@@ -184,6 +184,9 @@ pub struct Survey {
     /// Where in its spot a lidar's range comes from, as the estimator has
     /// learned it (Q30; [`Search::with_spot_share`]).
     share: i32,
+    /// The search's fix is refined with every reading
+    /// ([`config::refine::ENABLED`], [`Survey::set_refine`]).
+    refine: bool,
 }
 
 /// Where the turns have taken the body, in turns of
@@ -195,10 +198,8 @@ struct Sweep {
     /// The farthest turned each way: the ground between was swept, and a
     /// view taken at every turn.
     edges: [i8; 2],
-    /// The view (its index) taken at each edge, and its near front
-    /// reading (`ViewSums::near_front`).
+    /// The view (its index) taken at each edge.
     edge_views: [usize; 2],
-    edge_fronts: [Option<Length>; 2],
     /// A turn that way was blocked (the compass showed it).
     blocked: [bool; 2],
     /// Steps of the turn under way: from where it is past the edge that
@@ -208,14 +209,7 @@ struct Sweep {
 
 impl Sweep {
     /// At the first view, nothing swept.
-    const START: Sweep = Sweep {
-        at: 0,
-        edges: [0, 0],
-        edge_views: [0, 0],
-        edge_fronts: [None, None],
-        blocked: [false, false],
-        steps: 1,
-    };
+    const START: Sweep = Sweep { at: 0, edges: [0, 0], edge_views: [0, 0], blocked: [false, false], steps: 1 };
 }
 
 impl Default for Survey {
@@ -225,6 +219,13 @@ impl Default for Survey {
 }
 
 impl Survey {
+    /// Whether the search's fix is refined with every reading of the
+    /// survey ([`crate::model::locate::refine`]); kept by
+    /// [`Survey::restart`].
+    pub fn set_refine(&mut self, on: bool) {
+        self.refine = on;
+    }
+
     /// The procedure's search reads each range `share` (Q30) of the way
     /// into its spot: the estimator's learned share (a new procedure reads
     /// the cone's nearest wall point, 0).
@@ -252,6 +253,7 @@ impl Survey {
             sweep: Sweep::START,
             room: RoomLog { moved_mm: 0, reversed: 0, squeezed: 0, cut_short: false },
             share: 0,
+            refine: config::refine::ENABLED,
         }
     }
 
@@ -265,7 +267,20 @@ impl Survey {
     /// `cargo fw-image`'s ELF); in place the deepest is 13.6 kB.
     pub fn restart(&mut self) {
         // every field named: a new one must be restarted too
-        let Survey { views: _, count, turns, phase, ticks, clockwise, view, positioned, sweep, room, share: _ } = self;
+        let Survey {
+            views: _,
+            count,
+            turns,
+            phase,
+            ticks,
+            clockwise,
+            view,
+            positioned,
+            sweep,
+            room,
+            share: _,
+            refine: _,
+        } = self;
         // (the views past `count` are not read)
         *count = 0;
         turns.clear();
@@ -393,10 +408,9 @@ impl Survey {
         let Some(r) = self.view.readings() else {
             return Action::Done(Err(Failure::NoHeading));
         };
-        let near_front = self.view.near_front();
         if !self.positioned {
             self.positioned = true;
-            let mm = room::positioning_mm(near_front);
+            let mm = room::positioning_mm(r.front);
             if mm != 0 {
                 return self.drive(mm);
             }
@@ -417,9 +431,9 @@ impl Survey {
                 (*ccw, *cw) = ((*ccw).min(sw.at), (*cw).max(sw.at));
             }
         }
-        for ((edge, view), front) in sw.edges.iter().zip(sw.edge_views.iter_mut()).zip(sw.edge_fronts.iter_mut()) {
+        for (edge, view) in sw.edges.iter().zip(sw.edge_views.iter_mut()) {
             if *edge == sw.at {
-                (*view, *front) = (self.count, near_front);
+                *view = self.count;
             }
         }
         if let Some(slot) = self.views.get_mut(self.count) {
@@ -458,10 +472,7 @@ impl Survey {
         let room = |clockwise: bool, ahead: Ahead| {
             let way = usize::from(clockwise);
             let edge_view = sw.edge_views.get(way).and_then(|&i| views.get(i));
-            // the room ahead from the view's near front reading
-            let front = sw.edge_fronts.get(way).copied().flatten();
-            let edge_view = edge_view.map(|v| Readings { front, ..*v });
-            sw.blocked.get(way) == Some(&false) && edge_view.is_some_and(|v| room::room_to_turn(&v, clockwise, ahead))
+            sw.blocked.get(way) == Some(&false) && edge_view.is_some_and(|v| room::room_to_turn(v, clockwise, ahead))
         };
         let few = self.count < config::locate::MIN_VIEWS;
         let way = [(self.clockwise, Ahead::Slanted), (!self.clockwise, Ahead::Slanted)]
@@ -510,7 +521,7 @@ impl Survey {
         match result {
             // (the fix's heading is the compass's, within goto's limit)
             Ok(fix) if (!fix.ambiguous && position_steerable(fix.sigma_x, fix.sigma_y, 1)) || last_view => {
-                if config::refine::ENABLED {
+                if self.refine {
                     // refined from the next tick (not here, deep in the
                     // search's calls: `Survey::refine`)
                     self.enter(Phase::Searched(fix))

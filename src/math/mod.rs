@@ -49,15 +49,6 @@ pub const fn cos_f64(x: f64) -> f64 {
     sum
 }
 
-/// tan of `deg` degrees, below 90 (const: for the config's angles), from
-/// [`cos_f64`].
-pub const fn tan_f64(deg: f64) -> f64 {
-    let x = deg * core::f64::consts::PI / 180.0;
-    let c = cos_f64(x);
-    let s = cos_f64(x - core::f64::consts::FRAC_PI_2);
-    s / c
-}
-
 /// ln(x) for x > 0 (const: for the config's constants): halved or
 /// doubled into [0.75, 1.5], then the series of `2 atanh((x - 1) / (x +
 /// 1))`, whose ratio is then at most 1/5 a term.

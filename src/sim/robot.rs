@@ -120,6 +120,9 @@ pub struct SimConfig {
     /// ([`crate::config::locate::AT_POWER_UP`]). False: it starts
     /// believing `start` (a test that needs a known start).
     pub locate_at_power_up: bool,
+    /// Localizations refine the search's fix with every reading
+    /// (`Controller::set_refine`; default `config::refine::ENABLED`).
+    pub refine: bool,
     pub seed: u64,
     pub noise: Noise,
     pub kinematics: Kinematics,
@@ -138,6 +141,7 @@ impl Default for SimConfig {
                 config::sim::START_HEADING_DEG.to_radians(),
             ),
             locate_at_power_up: config::locate::AT_POWER_UP,
+            refine: config::refine::ENABLED,
             seed: 1,
             noise: Noise::default(),
             kinematics: Kinematics::default(),
@@ -234,6 +238,7 @@ impl SimRobot {
         if flash.is_some() {
             ctl.restore_settings(&mut out);
         }
+        ctl.set_refine(cfg.refine);
         if cfg.locate_at_power_up {
             ctl.power_up(&mut out);
         }

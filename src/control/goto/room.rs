@@ -16,11 +16,9 @@ use crate::config;
 use crate::math::{isqrt64, Length};
 use crate::model::measurement::Arena;
 
-/// A heading within 15 degrees of a wall runs along it: the sine of 15
-/// degrees in Q30 (driving 100 mm moves the centre off it 26 mm at most).
-/// (30 degrees left a body near a wall met at 25 degrees no way out: it
-/// turned into the wall, issue #29's hard world.)
-const ALONG_WALL: i64 = (crate::math::cos_f64(75.0 * core::f64::consts::PI / 180.0) * (1u64 << 30) as f64) as i64;
+/// A heading within 30 degrees of a wall runs along it: the sine of 30
+/// degrees in Q30 (driving 100 mm moves the centre off it 50 mm at most).
+const ALONG_WALL: i64 = 1 << 29;
 
 /// What a turn about a centre needs first.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]

@@ -74,9 +74,7 @@ fn front_needed_mm(ahead: Ahead) -> i32 {
 /// ([`room_to_turn`]). Nearer: back up to it (at most
 /// [`config::locate::MAX_BACK_UP_MM`]: behind is unseen). Farther: drive
 /// forward until a wall touching the body's back would be the reach behind
-/// the turning centre, but not past the aim, nor nearer the wall ahead than
-/// [`SLANT_CLEAR_MM`] (a wall met at a slant meets a front corner first).
-/// No front reading: stay.
+/// the turning centre, but not past the aim. No front reading: stay.
 pub fn positioning_mm(front: Option<Length>) -> i32 {
     let Some(front) = front else { return 0 };
     let aim = front_needed_mm(Ahead::Slanted).saturating_add(config::locate::POSITION_SLACK_MM);
@@ -84,23 +82,8 @@ pub fn positioning_mm(front: Option<Length>) -> i32 {
     if room < 0 {
         return room.max(config::locate::MAX_BACK_UP_MM.saturating_neg());
     }
-    let slanted = front.to_mm().saturating_sub(SLANT_CLEAR_MM).max(0);
-    reach_mm().saturating_sub(centre_to_back_mm()).min(room).min(slanted)
+    reach_mm().saturating_sub(centre_to_back_mm()).min(room)
 }
-
-/// A forward drive stops this far from the wall the front beam reads, mm:
-/// a wall met at up to [`config::locate::GLANCING_DEG`] from square (past
-/// it the beam reads nothing or an echo) meets the body's front corner,
-/// [`config::geometry::BODY_HALF_WIDTH`] to the side of the beam, that
-/// far along it (`half width x tan(incidence)`), plus the margin and the
-/// wheels' speed error over the drive ([`config::locate::POSITION_SLACK_MM`]).
-/// Issue #29's hard world: drives to the turning room's aim (128 mm) met
-/// walls at 66 degrees. 53 mm x tan 75 degrees, 20 and 20: 237 mm.
-pub const SLANT_CLEAR_MM: i32 = {
-    let along =
-        (config::geometry::BODY_HALF_WIDTH.0 as f64 / 65536.0) * crate::math::tan_f64(config::locate::GLANCING_DEG);
-    along as i32 + config::locate::ROOM_MARGIN_MM + config::locate::POSITION_SLACK_MM
-};
 
 /// The view's readings show room for a turn that way: the wall ahead at
 /// least [`config::locate::FRONT_REACH_HALVES`] halves of the reach from

@@ -39,19 +39,6 @@ impl ViewSums {
     }
 }
 
-impl ViewSums {
-    /// The front lidar's second-nearest distance in the view (its nearest
-    /// with one reading), for the survey's room to move, after
-    /// [`ViewSums::readings`] sorted them: a beam's footprint that spans a
-    /// wall met at a slant and another mixes in the farther wall's ranges
-    /// (issue #29's hard world: the median then shows room that is not
-    /// there, and a drive met the slanted wall), so room is judged from
-    /// the near end; the second drops a spurious short echo.
-    pub fn near_front(&self) -> Option<Length> {
-        self.front.get(1).or(self.front.first()).copied()
-    }
-}
-
 /// The middle of `d` (the lower of the two middles of an even count), by
 /// an insertion sort of its few readings (core's sort brings panic paths
 /// and their messages into the image).

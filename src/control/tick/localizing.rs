@@ -7,7 +7,7 @@ use super::clock::Timer;
 use super::{Controller, Hardware, LineSink, Mode};
 use crate::config;
 use crate::control::protocol::number::{push_fixed_parts, push_i32, push_str, push_u32};
-use crate::math::{Angle, Speed, TurnRate};
+use crate::math::{Speed, TurnRate};
 use crate::model::locate::Fix;
 use crate::model::measurement::LidarId;
 use crate::model::Motion;
@@ -43,6 +43,13 @@ impl<H: Hardware> Controller<H> {
     /// ([`crate::model::measurement::Arena::centre`]).
     pub fn power_up(&mut self, sink: &mut impl LineSink) {
         self.handle(Command::Locate, sink);
+    }
+
+    /// Whether localizations refine the search's fix with every reading of
+    /// their surveys ([`crate::model::locate::refine`]; the default
+    /// [`config::refine::ENABLED`]).
+    pub fn set_refine(&mut self, on: bool) {
+        self.localizing.survey.set_refine(on);
     }
 
     /// Starts the procedure (`locate`, `reset`, and at power-up): the
@@ -100,17 +107,10 @@ impl<H: Hardware> Controller<H> {
             self.mode = Mode::Idle;
         }
         let views = self.localizing.survey.views().len();
-        let compass = self.localizing.survey.views().last().map(|v| v.heading);
         let then = self.localizing.restart();
         match result {
             Ok(fix) => {
                 self.estimator.start_at(&fix);
-                // the compass's offset from the fix's heading: none for the
-                // search's at the compass's heading, the disturbance for a
-                // refined one (or one the search fitted at another heading)
-                if let Some(compass) = compass {
-                    self.estimator.set_compass_bias(Angle(compass.diff(fix.pose.theta) as u32));
-                }
                 self.dead = fix.pose;
                 self.report_fix(&fix, views, sink);
                 if let Some(cmd) = then {

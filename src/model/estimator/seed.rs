@@ -2,12 +2,12 @@
 //! one hypothesis per place the readings fit (see the module docs of
 //! [`super`]).
 
-use super::constants::{BIAS_MAX_LSB, CATCH_UP_STANDING_Q16, P_MAX, R_COMPASS};
+use super::constants::{CATCH_UP_STANDING_Q16, P_MAX, R_COMPASS};
 use super::covariance::{T, X, Y};
 use super::predict::Filter;
 use super::{Estimator, EvidenceSet, Seed, Tracking};
 use crate::config::estimator as cfg;
-use crate::math::{Angle, Length};
+use crate::math::Length;
 use crate::model::state::Pose;
 
 impl Estimator {
@@ -47,20 +47,6 @@ impl Estimator {
             *seed = Seed { pose: fix.pose_of(c), sigma_x: c.sigma_x, sigma_y: c.sigma_y, weight: c.weight };
         }
         self.seed(seeds.get(..clusters.len().min(cfg::MAX_HYPOTHESES)).unwrap_or(&[whole]));
-    }
-
-    /// What the compass reads beyond the heading, as the localization
-    /// found it (the last view's compass heading less the fix's), for
-    /// every hypothesis; kept within the config's bound. The search's fix
-    /// takes its heading from the compass (no bias) unless the compass's
-    /// own fitted nowhere; the refinement's fits the heading to the lidars
-    /// (`model::locate::refine`), and the compass's offset from it is the
-    /// disturbance the filter would otherwise learn while it drives.
-    pub fn set_compass_bias(&mut self, bias: Angle) {
-        let bound = BIAS_MAX_LSB;
-        for h in self.hyps.iter_mut().take(self.live) {
-            h.bias = Angle(bias.diff(Angle::ZERO).clamp(-bound, bound) as u32);
-        }
     }
 
     /// Forgets everything but the counts and starts from up to
