@@ -1,10 +1,10 @@
 //! The search's fix refined with every reading of the survey (issue #29):
 //! the views and the readings taken while turning between them
-//! ([`Turn`]), explained by one model of the survey ([`rows`]: a pivot
+//! ([`Turn`]), explained by one model of the survey (`rows.rs`: a pivot
 //! that stays put, a heading per view, each way's turn rate, the
 //! compass's bias common to the views give or take a little, the lidars'
 //! noise growing with incidence and at corners), fitted by
-//! Levenberg-Marquardt ([`solve`]) with a bounded loss per reading.
+//! Levenberg-Marquardt (`solve.rs`) with a bounded loss per reading.
 //!
 //! Why: the search scores each view at its compass heading, and a
 //! disturbed compass (the hard world's 12 to 20 degrees, 5 to 8 more
