@@ -79,8 +79,8 @@ pub const MAX_ITERATIONS: u8 = 30;
 pub const MAX_TRIES: u8 = 6;
 /// Rows of the fit (a reading, a prior) a loop tick sums: a reading is a
 /// `Beam` and its noise, about 5,000 lx106 instructions with its
-/// derivatives, so 32 take about a quarter of the 10 ms tick, and a
-/// pass's end (the step's solve) a little more: the search's third at
-/// most (`lx106/BENCHMARKS.md`, "Refining the fix": 243,348 at worst, 30.4 %; 24 rows took 191,383
-/// at worst, 23.9 %).
+/// derivatives, so 32 take about a fifth of the 10 ms tick, and a pass's
+/// end (the step's solve) a little more: under the search's third
+/// (`lx106/BENCHMARKS.md`, "Refining the fix": 212,979 at worst, 26.6 %;
+/// with every start tried 233,459, 29.1 %).
 pub const ROWS_PER_STEP: usize = 32;
