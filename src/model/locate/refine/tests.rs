@@ -155,14 +155,3 @@ fn the_config_logarithm_is_the_logarithm() {
         assert!((crate::math::ln_f64(x) - x.ln()).abs() < 1e-9, "{x}");
     }
 }
-
-#[test]
-fn sizes() {
-    std::println!(
-        "Search {} Refine {} Fit {} Turn {}",
-        core::mem::size_of::<crate::model::locate::Search>(),
-        core::mem::size_of::<Refine>(),
-        core::mem::size_of::<Fit>(),
-        core::mem::size_of::<Turn>()
-    );
-}
