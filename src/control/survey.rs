@@ -48,68 +48,18 @@ use crate::control::goto::position_steerable;
 use crate::math::{Angle, Length};
 use crate::model::locate::refine::Refine;
 use crate::model::locate::turns::Turn;
-use crate::model::locate::{Fix, LocateError, Readings, Search, MAX_VIEWS};
+use crate::model::locate::{Fix, Readings, Search, MAX_VIEWS};
 use crate::model::measurement::{Arena, LidarId};
 
+mod answer;
 pub mod room;
 mod view;
+pub use answer::{Action, Failure};
 use room::Ahead;
+pub use room::RoomLog;
 use view::ViewSums;
 #[cfg(test)]
 mod tests;
-
-/// Why there is no fix.
-#[derive(Clone, Copy, PartialEq, Eq, Debug)]
-pub enum Failure {
-    /// The compass gave no heading for a view.
-    NoHeading,
-    /// Neither lidar gave a distance in any view.
-    NoRange,
-    /// No pose in the box explains the views (an obstacle, another box).
-    NothingFits,
-    /// [`config::locate::TIME_LIMIT_MS`] ran out.
-    OutOfTime,
-    /// A command came (it runs instead).
-    Interrupted,
-}
-
-impl Failure {
-    /// The reason in words, for the `# locate failed` line.
-    pub fn text(self) -> &'static str {
-        match self {
-            Failure::NoHeading => "no compass heading",
-            Failure::NoRange => "no lidar distance",
-            Failure::NothingFits => "no pose in the box explains the readings",
-            Failure::OutOfTime => "out of time",
-            Failure::Interrupted => "interrupted by a command",
-        }
-    }
-}
-
-impl From<LocateError> for Failure {
-    fn from(e: LocateError) -> Failure {
-        match e {
-            LocateError::NoReading => Failure::NoRange,
-            LocateError::NothingFits => Failure::NothingFits,
-        }
-    }
-}
-
-/// What the body does this tick, or the procedure's answer.
-#[derive(Clone, Copy, PartialEq, Eq, Debug)]
-pub enum Action {
-    Stand,
-    /// Turn in place at [`config::locate::TURN_MRAD_S`].
-    Turn {
-        clockwise: bool,
-    },
-    /// Drive straight at [`config::locate::POSITION_MM_S`] (making room
-    /// before the first view).
-    Drive {
-        forward: bool,
-    },
-    Done(Result<Fix, Failure>),
-}
 
 /// Where the procedure is.
 // one phase at a time, inside the controller: no box (no allocator)
@@ -147,20 +97,15 @@ const VIEW_TICKS: u32 = ticks(config::locate::VIEW_LIMIT_MS);
 const BLOCKED: i32 = (config::locate::BLOCKED_TURN_DEG as i64 * (1 << 32) / 360) as i32;
 const _: () = assert!(config::locate::MIN_VIEWS >= 1 && config::locate::MIN_VIEWS <= MAX_VIEWS && TURN_TICKS > 0);
 
-/// What the survey did to keep the body off the walls (see [`room`]).
-#[derive(Clone, Copy, Default, PartialEq, Eq, Debug)]
-pub struct RoomLog {
-    /// The drive before the first view, mm, forward positive (as planned:
-    /// the wheels' true distance may differ).
-    pub moved_mm: i32,
-    /// Turns taken the other way than the last one because the view showed
-    /// no room for it (the first turn counterclockwise included).
-    pub reversed: u8,
-    /// Turns taken with room only for a wall square ahead (before the
-    /// search had its views).
-    pub squeezed: u8,
-    /// Neither way had room: the survey took the views it had.
-    pub cut_short: bool,
+/// The first `count` of `views`: the views taken ([`Survey::views`]).
+fn taken(views: &[Readings], count: usize) -> &[Readings] {
+    views.get(..count).unwrap_or(&[])
+}
+
+/// Of `turns`, those with a view after them when `count` views are taken
+/// ([`Survey::turns`]).
+fn between(turns: &[Turn], count: usize) -> &[Turn] {
+    turns.get(..count.saturating_sub(1)).unwrap_or(turns)
 }
 
 /// The procedure (see the module docs).
@@ -318,7 +263,7 @@ impl Survey {
 
     /// Views taken so far.
     pub fn views(&self) -> &[Readings] {
-        self.views.get(..self.count).unwrap_or(&[])
+        taken(&self.views, self.count)
     }
 
     /// The turns between the views so far, with the lidars' readings
@@ -327,8 +272,7 @@ impl Survey {
     /// or one whose view never came (the view had no heading, the survey
     /// was stopped), is not among them.
     pub fn turns(&self) -> &[Turn] {
-        let between = self.count.saturating_sub(1);
-        self.turns.get(..between).unwrap_or(&self.turns)
+        between(&self.turns, self.count)
     }
 
     /// A lidar's distance (the lidar model's output): kept while a view is
@@ -393,8 +337,7 @@ impl Survey {
             }
             Phase::Refine(refine) => {
                 // (the fields, not `views()` and `turns()`: the phase is borrowed)
-                let views = self.views.get(..self.count).unwrap_or(&[]);
-                let turns = self.turns.get(..self.count.saturating_sub(1)).unwrap_or(&self.turns);
+                let (views, turns) = (taken(&self.views, self.count), between(&self.turns, self.count));
                 match refine.step(arena, views, turns) {
                     None => Action::Stand,
                     Some(_) => Action::Done(Ok(refine.refined_fix())),

@@ -95,3 +95,20 @@ pub fn room_to_turn(view: &Readings, clockwise: bool, ahead: Ahead) -> bool {
     let right = !clockwise || view.right.is_none_or(|d| d.to_mm() >= reach_mm());
     front && right
 }
+
+/// What the survey did to keep the body off the walls (see the module
+/// docs).
+#[derive(Clone, Copy, Default, PartialEq, Eq, Debug)]
+pub struct RoomLog {
+    /// The drive before the first view, mm, forward positive (as planned:
+    /// the wheels' true distance may differ).
+    pub moved_mm: i32,
+    /// Turns taken the other way than the last one because the view showed
+    /// no room for it (the first turn counterclockwise included).
+    pub reversed: u8,
+    /// Turns taken with room only for a wall square ahead (before the
+    /// search had its views).
+    pub squeezed: u8,
+    /// Neither way had room: the survey took the views it had.
+    pub cut_short: bool,
+}
