@@ -257,6 +257,9 @@ impl Beam {
     /// perfect reading; positive when the reading is longer than expected.
     /// The cone's cosine times the ordinary innovation `z - expected`, with
     /// no division.
+    // tick bar (this and the next three): inlined into the estimator's
+    // correction; the refinement, a second caller, had LLVM call them,
+    // +38 instructions on the four-hypothesis tick (lx106/BENCHMARKS.md)
     #[inline(always)]
     pub fn normal_miss(&self, z: Length) -> Length {
         // 0 < cone_normal <= 2^30: the product is below |z + setback|

@@ -40,7 +40,7 @@ use crate::model::locate::turns::Turn;
 use crate::model::locate::{Fix, Readings, MAX_CLUSTERS, MAX_VIEWS};
 use crate::model::measurement::Arena;
 use crate::model::state::Pose;
-use rows::{Loss, Model, Params, BIAS, CCW, CW, HEADING, LEVER, MAX_PARAMS, ONE_SIGMA, PX, PY};
+use rows::{param, Loss, Model, Params, BIAS, CCW, CW, HEADING, LEVER, MAX_PARAMS, ONE_SIGMA, PX, PY};
 use solve::{Sums, DAMPING_MAX, DAMPING_MIN};
 
 /// Where in its spot a range is read from, held through a start.
@@ -421,7 +421,7 @@ impl Fit {
 
     /// Where it ended: the last view's pose and the cost with `margin`.
     fn end(&self, views: usize, margin: i64) -> End {
-        let get = |k: usize| self.p.get(k).copied().unwrap_or(0);
+        let get = |k: usize| param(&self.p, k);
         let theta = Angle(get(HEADING.saturating_add(views.saturating_sub(1))) as u32);
         let (s, c) = sin_cos(theta);
         let x = get(PX).saturating_add(get(LEVER).saturating_mul(i64::from(c)) >> 30);

@@ -40,6 +40,11 @@ pub const MAX_PARAMS: usize = HEADING + MAX_VIEWS;
 
 pub type Params = [i64; MAX_PARAMS];
 
+/// Parameter `k` of `p` (0 past the parameters).
+pub fn param(p: &Params, k: usize) -> i64 {
+    p.get(k).copied().unwrap_or(0)
+}
+
 /// One mrad in angle LSB.
 pub const MRAD: i64 = Angle::from_radians_f64(0.001).0 as i64;
 /// A rate's unit: one mrad over a 32-tick turn (a quarter turn's
@@ -221,7 +226,7 @@ impl Model<'_> {
     pub fn rows(&self, p: &Params, derivatives: bool, from: usize, count: usize, mut f: impl FnMut(&Row)) -> bool {
         // a row is made only when its index is in the slice
         let mut slice = Slice { index: 0, from, end: from.saturating_add(count) };
-        let get = |k: usize| p.get(k).copied().unwrap_or(0);
+        let get = |k: usize| param(p, k);
         let views = self.views.get(..MAX_VIEWS).unwrap_or(self.views);
         for (i, v) in views.iter().enumerate() {
             let k = HEADING.saturating_add(i);
@@ -286,7 +291,7 @@ impl Model<'_> {
     /// The prior that the last view stays near the search's place: along
     /// x, or along y.
     fn near(&self, p: &Params, last: usize, on_x: bool) -> Row {
-        let get = |k: usize| p.get(k).copied().unwrap_or(0);
+        let get = |k: usize| param(p, k);
         let (s, c) = sin_cos(Angle(get(last) as u32));
         let (s, c) = (i64::from(s), i64::from(c));
         let d = get(LEVER);
@@ -303,7 +308,7 @@ impl Model<'_> {
 
     /// A lidar's reading `z` with the body at heading `at`.
     fn lidar(&self, p: &Params, at: At, id: LidarId, z: Length, derivatives: bool) -> Row {
-        let get = |k: usize| p.get(k).copied().unwrap_or(0);
+        let get = |k: usize| param(p, k);
         let theta = Angle(at.theta as u32);
         let (s, c) = sin_cos(theta);
         let (s, c) = (i64::from(s), i64::from(c));
