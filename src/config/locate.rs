@@ -110,6 +110,15 @@ pub const TURN_SAMPLES: usize = 12;
 /// ms: the servos stop within a tick (data `servo_runs.csv`), and a
 /// lidar reading begun while turning (33 ms each) is over.
 pub const SETTLE_MS: u32 = 100;
+/// A counterclockwise turn swings the nose to the left, which no lidar
+/// sees from the view it starts at; the survey's earlier views may have
+/// (its turns in place keep the turning centre): a reading of theirs in a
+/// direction within this of the left, degrees, must show the room a turn
+/// wants (`control::survey::room`). 45: the views are a turn step apart,
+/// so a view's right or front falls within it when one was taken there
+/// (issue #29's hard world: the surveys' wall contacts were turns toward
+/// an unseen wall on the left).
+pub const LEFT_SEEN_DEG: i32 = 45;
 /// A turn the compass says moved less than this, degrees, was blocked
 /// (the body against a wall): the next turns go the other way.
 pub const BLOCKED_TURN_DEG: i32 = 20;

@@ -415,7 +415,10 @@ impl Survey {
         let room = |clockwise: bool, ahead: Ahead| {
             let way = usize::from(clockwise);
             let edge_view = sw.edge_views.get(way).and_then(|&i| views.get(i));
-            sw.blocked.get(way) == Some(&false) && edge_view.is_some_and(|v| room::room_to_turn(v, clockwise, ahead))
+            sw.blocked.get(way) == Some(&false)
+                && edge_view.is_some_and(|v| {
+                    room::room_to_turn(v, clockwise, ahead) && (clockwise || room::left_clear(views, v.heading))
+                })
         };
         let few = self.count < config::locate::MIN_VIEWS;
         let way = [(self.clockwise, Ahead::Slanted), (!self.clockwise, Ahead::Slanted)]

@@ -20,18 +20,21 @@
 //! - To the right, the right lidar reads across the body (the centre lies
 //!   on that line's perpendicular): a clockwise turn swings the nose that
 //!   way, so it wants the reach there.
-//! - Behind and to the left nothing is seen. Before the first view the
-//!   survey drives forward until a wall right behind the centre would be
-//!   cleared (as far as the front shows room), or backs up from a wall
+//! - Behind and to the left the view sees nothing. Before the first view
+//!   the survey drives forward until a wall right behind the centre would
+//!   be cleared (as far as the front shows room), or backs up from a wall
 //!   seen ahead; a counterclockwise turn is taken only when the right
-//!   shows no room.
+//!   shows no room, and only when no earlier view saw a wall within the
+//!   reach to the left ([`left_clear`]: the views share the turning
+//!   centre, and one taken facing the other way saw the left with its
+//!   right lidar).
 //!
 //! A reading that is missing (no target, or a glancing beam) shows no
 //! wall: the survey does not stop for it.
 
 use crate::config;
 use crate::control::goto::room::{reference_to_skid, swept_radius};
-use crate::math::Length;
+use crate::math::{Angle, Length};
 use crate::model::locate::Readings;
 
 /// The room the survey wants around its turning centre, mm: the swept
@@ -94,6 +97,28 @@ pub fn room_to_turn(view: &Readings, clockwise: bool, ahead: Ahead) -> bool {
     let front = view.front.is_none_or(|d| d.to_mm() >= front_needed_mm(ahead));
     let right = !clockwise || view.right.is_none_or(|d| d.to_mm() >= reach_mm());
     front && right
+}
+
+/// [`config::locate::LEFT_SEEN_DEG`] (below half a turn: fits an i32).
+const LEFT_SEEN: Angle = Angle::from_degrees_f64(config::locate::LEFT_SEEN_DEG as f64);
+
+/// No earlier view saw a wall to the left of `heading` within the reach
+/// of the turning centre: each reading of `views` in a direction within
+/// [`config::locate::LEFT_SEEN_DEG`] of the left is the reach or more from
+/// the centre (a front reading from the reference point, ahead of the
+/// centre; a right one across it). A view with no such reading says
+/// nothing.
+pub fn left_clear(views: &[Readings], heading: Angle) -> bool {
+    let left = heading.wrapping_sub(Angle::QUARTER_TURN);
+    let near = |direction: Angle| direction.diff(left).saturating_abs() <= LEFT_SEEN.0 as i32;
+    let behind = config::locate::TURN_CENTRE_BEHIND_REFERENCE.to_mm();
+    let clear = |reading: Option<Length>, from_centre: i32| {
+        reading.is_none_or(|d| d.to_mm().saturating_add(from_centre) >= reach_mm())
+    };
+    views.iter().all(|v| {
+        (!near(v.heading) || clear(v.front, behind))
+            && (!near(v.heading.wrapping_add(Angle::QUARTER_TURN)) || clear(v.right, 0))
+    })
 }
 
 /// What the survey did to keep the body off the walls (see the module
