@@ -127,19 +127,36 @@ pub const MAX_INCIDENCE_DEG: f64 = 75.0;
 /// reading's variance is `LIDAR_SIGMA^2 + (this tan(incidence))^2`: 15 mm
 /// at 45 degrees, 26 mm at 60, 56 mm at 75.
 pub const LIDAR_INCIDENCE_SIGMA_MM: f64 = 15.0;
-/// Lidar readings whose cone meets two walls at ranges closer than this
-/// are not used (which wall the reading came from is uncertain), mm. A
-/// side wall met at the cone's edge moves its nearest point by about
-/// 30 mm per degree of heading at the box's distances (160 mm from the
-/// wall, 17 degrees off its line), so a one-degree heading error can pick
-/// the wrong wall inside 30 mm, and a turn at a corner sweeps the
-/// cone's edge across a glancing wall: at 35 mm the realistic
-/// simulator's hours, from the power-up localization, took such a
-/// reading as the other wall's and jumped 22 mm (tests/sim/realistic_hour.rs:
-/// worst 34.4 mm over 20 seeds; at 40 mm, 24.0 mm). Larger is not
-/// better: from 45 mm the real drive (tests/estimator/lab2_drive.rs) loses
-/// readings it needs and steps further than the wheels drive.
+/// Lidar readings whose cone meets two walls at ranges closer than this,
+/// mm, are not used: the sensor mixes the two walls' returns, which no
+/// one wall explains (without the cut the real drive's estimate,
+/// tests/estimator/lab2_drive.rs, is lost and the hard world's laps run
+/// into walls). Beyond it the heading decides (`CORNER_SIGMAS`): with that,
+/// 30 mm passes every test 40 does, 50 all but the count of drive1's
+/// hypotheses in its replay (tests/tools/basics.rs); alone, as the only
+/// corner test, 35 failed the realistic hours and 45 the real drive.
 pub const CORNER_MARGIN: Length = Length::from_mm_f64(40.0);
+/// A lidar reading whose cone meets two walls at nearly the same range
+/// may have come from either: a side wall met at the cone's edge moves its
+/// nearest point by 30 mm and more per degree of heading at the box's
+/// distances, so which wall is nearest turns on the heading's error
+/// (`model::measurement::Beam::corner_sigma` has the geometry). Such a
+/// reading's sigma grows by this floor, mm (the wall's pick with the
+/// heading known: the position's and the reading's noise), plus what one
+/// sigma of the hypothesis's heading moves the two walls' ranges apart ...
+pub const CORNER_SIGMA_FLOOR_MM: f64 = 5.0;
+/// ... when the two walls' ranges are within this many of those sigmas
+/// (farther apart, no heading error the hypothesis allows picks the other
+/// wall). Before, a reading beyond `CORNER_MARGIN` counted in full: the
+/// realistic hours with the refined power-up met a turn at a corner, the
+/// heading 2 sigma off, that took the other wall's reading for its own
+/// and lagged 32 mm (tests/sim/realistic_hour.rs; 16 mm now), and the real
+/// drive started at a wrong pose stayed 116 mm off (5 mm now).
+pub const CORNER_SIGMAS: f64 = 3.0;
+/// The largest corner margin, mm: beyond it the cone's nearest points on
+/// the two walls are told apart by any heading (a heading sigma of 2
+/// degrees at 700 mm asks 160 mm).
+pub const CORNER_MARGIN_MAX: Length = Length::from_mm_f64(160.0);
 /// Initial position uncertainty (one sigma), mm: the robot is put down by
 /// hand near its start pose.
 pub const INITIAL_SIGMA_MM: f64 = 100.0;

@@ -5,6 +5,7 @@
 //! "Refining the fix", has the figures these come from.
 
 use super::estimator;
+use crate::math::Length;
 
 /// The survey refines the search's fix (`control::survey`): set false to
 /// take the search's fix as it is (the lab's world gains nothing from
@@ -32,8 +33,13 @@ pub const BIAS_MIX: (f64, f64, f64) = (0.7, estimator::COMPASS_SIGMA_DEG, 12.0);
 /// ... and each view's apart from it (the lab's views agree within a
 /// degree or two; the hard world's spread by 5 to 8).
 pub const VIEW_MIX: (f64, f64, f64) = (0.7, 1.5, 6.0);
-/// A reading whose cone meets two walls within `estimator::CORNER_MARGIN`
-/// of each other mixes their returns: its sigma grows by this, mm (half
+/// A reading whose cone meets two walls within this of each other, mm,
+/// is near a corner: the estimator's margin
+/// (`estimator::CORNER_MARGIN_FLOOR_MM` and its heading's share) for a
+/// heading known to 0.8 degrees at 300 mm (the refinement's poses carry no
+/// covariance) ...
+pub const CORNER_MARGIN: Length = Length::from_mm_f64(40.0);
+/// ... and mixes their returns: its sigma grows by this, mm (half
 /// the margin: the reference's half span of the footprint's ranges).
 pub const CORNER_SIGMA_MM: f64 = 20.0;
 /// The fit stays near the search's place: one sigma, mm (at least the
@@ -81,6 +87,6 @@ pub const MAX_TRIES: u8 = 6;
 /// `Beam` and its noise, about 5,000 lx106 instructions with its
 /// derivatives, so 32 take about a fifth of the 10 ms tick, and a pass's
 /// end (the step's solve) a little more: under the search's third
-/// (`lx106/BENCHMARKS.md`, "Refining the fix": 212,979 at worst, 26.6 %;
+/// (`lx106/BENCHMARKS.md`, "Refining the fix": 213,307 at worst, 26.6 %;
 /// with every start tried 233,459, 29.1 %).
 pub const ROWS_PER_STEP: usize = 32;

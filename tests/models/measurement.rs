@@ -113,3 +113,65 @@ fn corner_test_and_incidence_limit() {
         assert_eq!(b.square_enough(cos60), ok, "{deg}");
     }
 }
+
+/// The f64 cone's nearest point on a wall: the range from the lidar at
+/// (`mx`, `my`) looking along `dir` to the wall whose normal points along
+/// `normal` at `distance` from the lidar, and the cosine of that ray's
+/// incidence (the ray in the cone nearest the normal).
+fn cone_point(dir: f64, normal: f64, distance: f64) -> (f64, f64) {
+    let half = (paperbot::config::lidar::CONE_DEG / 2.0).to_radians();
+    let off = (normal - dir + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI;
+    let incidence = (off.abs() - half).max(0.0);
+    (distance / incidence.cos(), incidence.cos())
+}
+
+/// `Beam::corner_reading` against f64 geometry, looking into the
+/// north-east corner: the cone's nearest points on the two walls are `d`
+/// apart; a heading error `e` moves them apart by `r e (tan a + tan b)`,
+/// so the corner's variance for a heading variance times range squared
+/// `hr2` is `floor^2 + hr2 / (cos a cos b)^2` (with `sin(a + b)` taken as
+/// 1), and the reading is ambiguous when `d` is within `sigmas` of its
+/// root. Cases within 3 % of the threshold are skipped (the fixed point's
+/// rounding); the rest must agree exactly on ambiguity and within 1 % on
+/// the variance.
+#[test]
+fn the_corner_variance_is_what_a_heading_error_moves_the_two_walls_apart() {
+    let arena = Arena::DEFAULT;
+    let max = paperbot::model::measurement::CORNER_MARGIN_MAX.to_mm_f64();
+    let mut rng = Rng::new(29);
+    let (floor, sigmas) = (5.0, 3);
+    let (mut ambiguous, mut clear) = (0, 0);
+    for _ in 0..20_000 {
+        let t = PoseF64 {
+            x: LX - 80.0 - 400.0 * rng.uniform(),
+            y: WY - 80.0 - 300.0 * rng.uniform(),
+            theta: (5.0 + 80.0 * rng.uniform()).to_radians(),
+        };
+        let hr = 40.0 * rng.uniform();
+        let beam = Beam::new(&arena, &t.to_pose(), &FRONT_LIDAR);
+        // the lidar (50 mm behind the reference point) and its two walls
+        let (s, c) = t.theta.sin_cos();
+        let (mx, my) = (t.x + FRONT_LIDAR.forward.to_mm_f64() * c, t.y + FRONT_LIDAR.forward.to_mm_f64() * s);
+        let (rn, cn) = cone_point(t.theta, 0.0, LX - mx);
+        let (re, ce) = cone_point(t.theta, std::f64::consts::FRAC_PI_2, WY - my);
+        let apart = (rn - re).abs();
+        let want = floor * floor + (hr / (cn * ce)).powi(2);
+        let limit = (f64::from(sigmas) * want.sqrt()).min(max);
+        if (apart - limit).abs() < 0.03 * limit {
+            continue;
+        }
+        let got = beam.corner_reading(Length::ZERO, Length::from_mm_f64(floor), || (hr * hr * 4096.0) as i32, sigmas);
+        let got = got.unwrap();
+        let got = f64::from(got) / 4096.0;
+        if apart < limit {
+            let want = want.min(max * max);
+            assert!((got - want).abs() <= 0.01 * want, "{t:?} hr {hr:.1}: {got:.1} mm^2 vs {want:.1}");
+            ambiguous += 1;
+        } else {
+            assert_eq!(got, 0.0, "{t:?} hr {hr:.1}: {apart:.1} apart, limit {limit:.1}");
+            clear += 1;
+        }
+    }
+    println!("{ambiguous} ambiguous, {clear} clear");
+    assert!(ambiguous > 1_000 && clear > 1_000);
+}

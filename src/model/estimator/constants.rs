@@ -42,6 +42,16 @@ pub(super) const R_LIDAR: i32 = {
 /// R_INCIDENCE sin^2`, the variance `R_LIDAR + R_INCIDENCE tan^2` scaled by
 /// `cos^2` as the innovation is (no division).
 pub(super) const R_INCIDENCE: i32 = to_i32(cfg::LIDAR_INCIDENCE_SIGMA_MM * cfg::LIDAR_INCIDENCE_SIGMA_MM * Q12);
+/// A lidar reading's corner sigma with a known heading, Q16 mm (see
+/// `cfg::CORNER_SIGMA_FLOOR_MM`).
+pub(super) const CORNER_FLOOR: crate::math::Length = crate::math::Length::from_mm_f64(cfg::CORNER_SIGMA_FLOOR_MM);
+/// `P_tt r^2 / L^2` is the heading's variance times a range `r` squared
+/// (Q12 mm^2 for `r` in mm): the division by `L^2` is this shift (`L` a
+/// power of two).
+pub(super) const CORNER_RANGE_SHIFT: u32 = 2 * HEADING_LEVER_MM.trailing_zeros();
+const _: () = assert!(HEADING_LEVER_MM.count_ones() == 1);
+/// How many corner sigmas apart the walls' ranges make a reading ambiguous.
+pub(super) const CORNER_SIGMAS: i32 = to_i32(cfg::CORNER_SIGMAS);
 /// Compass variance in (L rad)^2, Q12 mm^2.
 pub(super) const R_COMPASS: i32 = to_i32(angle_var(cfg::COMPASS_SIGMA_DEG));
 /// gate^2 in Q8.

@@ -120,9 +120,9 @@ pub(super) fn mount_product(l: Length, t: i32) -> i32 {
     }
 }
 
-/// The largest margin [`super::Beam::near_corner`] tells apart: twice the
-/// estimator's (larger margins are taken as this one).
-pub const CORNER_MARGIN_MAX: Length = Length(config::estimator::CORNER_MARGIN.0 * 2);
+/// The largest margin [`super::Beam::near_corner`] tells apart (larger
+/// margins are taken as this one; `config::estimator::CORNER_MARGIN_MAX`).
+pub const CORNER_MARGIN_MAX: Length = config::estimator::CORNER_MARGIN_MAX;
 
 /// The cone's other candidate wall, for [`super::Beam::near_corner`].
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]

@@ -370,7 +370,7 @@ impl Model<'_> {
         let axis2 = mul_shr(axis, axis, 30);
         let tan2 = quotient(Q30.saturating_sub(axis2) as u32, axis2.max(0) as u64, 16).min(TAN2_MAX as u64) as i64;
         let mut var = LIDAR_VAR.saturating_add(mul_shr(INCIDENCE_VAR, tan2, 16));
-        if beam.near_corner(est::CORNER_MARGIN) {
+        if beam.near_corner(cfg::CORNER_MARGIN) {
             var = var.saturating_add(CORNER_VAR);
         }
         let cos = cone.saturating_sub(mul_shr(cone.saturating_sub(axis), self.share.q30(), 30));
