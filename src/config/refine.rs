@@ -11,7 +11,7 @@ use crate::math::Length;
 /// take the search's fix as it is (the lab's world gains nothing from
 /// the refinement, issue #29's hard world most of its right fixes;
 /// docs/simulator.md, "Refining the fix").
-pub const ENABLED: bool = false;
+pub const ENABLED: bool = true;
 
 /// The bounded loss's scale, sigmas (Geman-McClure: a reading this far
 /// off costs half its square's bound, one much farther almost nothing: a

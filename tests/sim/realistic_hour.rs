@@ -7,8 +7,11 @@
 //! Samples taken while it localizes again (a `goto` on an estimate too
 //! uncertain to steer by) do not count: the robot claims no pose then.
 //!
-//! Measured: worst 17.9 mm over the 20 seeds (30.0 before issue 29's
-//! estimator; 21.8 before the lighter secondary hypotheses and the
+//! Measured: worst 16.2 mm over the 20 seeds, the median of their worsts
+//! 13.5, the power-up fix refined (the default; 16.7 and 12.6 unrefined;
+//! 32.1 refined before readings near a corner carried the heading's
+//! uncertainty, `config::estimator::CORNER_SIGMAS`). Before that: worst
+//! 17.9 mm unrefined (30.0 before issue 29's estimator; 21.8 before the lighter secondary hypotheses and the
 //! search's pivot and fourth view), the median of their worsts 14.5 mm
 //! (16.4), rms about 2 mm, no collision; 11 `goto`s localized first.
 //! About 0.4 s per simulated hour with the test profile's optimisation, so
