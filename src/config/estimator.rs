@@ -140,10 +140,11 @@ pub const CORNER_MARGIN: Length = Length::from_mm_f64(40.0);
 /// may have come from either: a side wall met at the cone's edge moves its
 /// nearest point by 30 mm and more per degree of heading at the box's
 /// distances, so which wall is nearest turns on the heading's error
-/// (`model::measurement::Beam::corner_sigma` has the geometry). Such a
-/// reading's sigma grows by this floor, mm (the wall's pick with the
-/// heading known: the position's and the reading's noise), plus what one
-/// sigma of the hypothesis's heading moves the two walls' ranges apart ...
+/// (`model::measurement::Beam::corner_reading` has the geometry). Such a
+/// reading's variance grows by this floor squared, mm (the wall's pick
+/// with the heading known: the position's and the reading's noise), plus
+/// the square of what one sigma of the hypothesis's heading moves the two
+/// walls' ranges apart ...
 pub const CORNER_SIGMA_FLOOR_MM: f64 = 5.0;
 /// ... when the two walls' ranges are within this many of those sigmas
 /// (farther apart, no heading error the hypothesis allows picks the other

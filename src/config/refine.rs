@@ -34,10 +34,10 @@ pub const BIAS_MIX: (f64, f64, f64) = (0.7, estimator::COMPASS_SIGMA_DEG, 12.0);
 /// degree or two; the hard world's spread by 5 to 8).
 pub const VIEW_MIX: (f64, f64, f64) = (0.7, 1.5, 6.0);
 /// A reading whose cone meets two walls within this of each other, mm,
-/// is near a corner: the estimator's margin
-/// (`estimator::CORNER_MARGIN_FLOOR_MM` and its heading's share) for a
-/// heading known to 0.8 degrees at 300 mm (the refinement's poses carry no
-/// covariance) ...
+/// is near a corner: the estimator's cut for mixed returns
+/// (`estimator::CORNER_MARGIN`); the refinement's poses carry no heading
+/// covariance for the estimator's band beyond it (`estimator::
+/// CORNER_SIGMAS`) ...
 pub const CORNER_MARGIN: Length = Length::from_mm_f64(40.0);
 /// ... and mixes their returns: its sigma grows by this, mm (half
 /// the margin: the reference's half span of the footprint's ranges).

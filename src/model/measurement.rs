@@ -358,10 +358,10 @@ impl Beam {
         // apart^2 < sigmas^2 (floor^2 cs^2 + heading_range2) in Q8 mm^2,
         // 32-bit (the lx106 multiplies 32 bits natively, not 64): apart is
         // below the largest margin (2^21.3 in Q14), in Q4 below 2^11.3, its
-        // square below 2^23; the floor's below 2^14; the heading's Q12 >> 4
-        // below 2^23; the sum times sigmas^2 (at most 64) below 2^30. The
-        // heading's is asked for only now: most cones that meet two walls
-        // are past the largest margin.
+        // square below 2^23; the floor's (within the largest margin) and the
+        // heading's Q12 >> 4 each below 2^23; the sum times sigmas^2 (at
+        // most 64) below 2^30. The heading's is asked for only now: most
+        // cones that meet two walls are past the largest margin.
         let apart = apart >> 10;
         let heading_range2 = heading_range2().clamp(0, MAX_VARIANCE_Q12);
         let floor = floor.0.clamp(0, CORNER_MARGIN_MAX.0);
