@@ -206,10 +206,10 @@ fn replay_says_how_the_estimate_agrees_with_its_readings() {
     let apart = |a: &replay::Estimate, b: &replay::Estimate| {
         (a.pose.x.to_mm_f64() - b.pose.x.to_mm_f64()).hypot(a.pose.y.to_mm_f64() - b.pose.y.to_mm_f64())
     };
-    let half = good_est.iter().zip(&est).position(|(g, l)| apart(g, l) <= 50.0).unwrap_or(rows.len());
-    assert!(half >= 10, "the wrong start was right after {half} rows");
-    let early_good = agreement(&rows[..half], &good_est[..half], &good_stats, &arena);
-    let early_lost = agreement(&rows[..half], &est[..half], &stats, &arena);
+    let wrong_rows = good_est.iter().zip(&est).position(|(g, l)| apart(g, l) <= 50.0).unwrap_or(rows.len());
+    assert!(wrong_rows >= 10, "the wrong start was right after {wrong_rows} rows");
+    let early_good = agreement(&rows[..wrong_rows], &good_est[..wrong_rows], &good_stats, &arena);
+    let early_lost = agreement(&rows[..wrong_rows], &est[..wrong_rows], &stats, &arena);
     for (name, a) in [
         ("located", &good),
         ("wrong start", &lost),
@@ -227,7 +227,7 @@ fn replay_says_how_the_estimate_agrees_with_its_readings() {
     assert!(!good.lost() && good.accepted_share() > 0.7);
     assert!(lost.lost(), "a wrong start is lost");
     println!(
-        "its first {half} rows: mean normalised innovation {:.1} located, {:.1} wrong",
+        "its first {wrong_rows} rows: mean normalised innovation {:.1} located, {:.1} wrong",
         early_good.mean_normalised(),
         early_lost.mean_normalised()
     );
