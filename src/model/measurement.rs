@@ -44,10 +44,10 @@ mod cone;
 pub use cone::CORNER_MARGIN_MAX;
 
 use crate::config;
-use crate::math::{mul_hi, mul_hi_u, mul_q30, mul_q30_unsat, reciprocal, sin_cos, Angle, Coord, Length};
+use crate::math::{mul_q30, mul_q30_unsat, sin_cos, Angle, Coord, Length};
 use crate::model::lidar::LidarMount;
 use crate::model::state::Pose;
-use cone::{cone_sine, mount_product, mul_cos, side_search, sides_clear, Corner, Incidence, COS_HALF_CONE, ONE};
+use cone::{cone_sine, mount_product, side_search, sides_clear, Corner, Incidence, COS_HALF_CONE, ONE};
 
 /// A rectangular arena with its origin at a corner (see the module docs).
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
@@ -112,15 +112,6 @@ impl Wall {
         matches!(self, Wall::South | Wall::North)
     }
 }
-
-/// The largest margin's square, Q12 mm^2 (160 mm: 2^26.6): the corner's
-/// variance saturates there.
-const MAX_VARIANCE_Q12: i32 = {
-    let m = (CORNER_MARGIN_MAX.0 >> 8) as i64; // Q8 mm
-    let v = (m * m) >> 4; // Q12 mm^2
-    assert!(v < 1 << 30);
-    v as i32
-};
 
 /// Three quarters of a turn, as an [`Angle`]'s bits.
 const THREE_QUARTERS: u32 = 3 << 30;
@@ -315,90 +306,6 @@ impl Beam {
         self.normal >= min_normal
     }
 
-    /// True when the cone meets a second wall within [`CORNER_MARGIN_MAX`]
-    /// of the beam's (then [`Beam::corner_reading`] tells how near).
-    pub fn meets_two_walls(&self) -> bool {
-        matches!(self.corner, Corner::Cross { .. })
-    }
-
-    /// How a reading's range depends on the cone meeting two walls: `None`
-    /// when their ranges are within `mixed` (the sensor mixes their
-    /// returns: the reading is not used, as [`Beam::near_corner`] says);
-    /// else the corner's variance, Q12 mm^2, 0 when the walls are told
-    /// apart. A heading error `e` moves the two walls' nearest points apart
-    /// by `r (tan a + tan b) e` for the cone's incidences `a`, `b` on walls
-    /// at right angles (`r` the range): `r e sin(a + b) / (cos a cos b)`,
-    /// taken with `sin(a + b) = 1` (`a + b` is at least 65 degrees: at most
-    /// 10 % more). With `heading_range2()` the heading's variance times the
-    /// range squared (Q12 mm^2), the corner's variance is `floor^2 +
-    /// heading_range2() / (cos a cos b)^2`, and the reading is ambiguous
-    /// when the walls' ranges are within `sigmas` of its root (at most
-    /// [`CORNER_MARGIN_MAX`]). The tests are division-free and root-free, in
-    /// 32 bits; the variance one [`reciprocal`].
-    pub fn corner_reading(
-        &self,
-        mixed: Length,
-        floor: Length,
-        heading_range2: impl FnOnce() -> i32,
-        sigmas: i32,
-    ) -> Option<i32> {
-        let Corner::Cross { cross, other_cross, other_normal } = self.corner else {
-            return Some(0);
-        };
-        // n_a n_b in Q30 (as `near_corner`); the walls' distance apart
-        // times it, in Q14 mm (below 2^29)
-        let cs = mul_cos(other_normal, self.cone_normal) << 2;
-        let apart = (cross - other_cross).abs();
-        if apart < mul_hi(mixed.0.clamp(0, CORNER_MARGIN_MAX.0), cs) {
-            return None;
-        }
-        if apart >= mul_hi(CORNER_MARGIN_MAX.0, cs) {
-            return Some(0);
-        }
-        // apart^2 < sigmas^2 (floor^2 cs^2 + heading_range2) in Q8 mm^2,
-        // 32-bit (the lx106 multiplies 32 bits natively, not 64): apart is
-        // below the largest margin (2^21.3 in Q14), in Q4 below 2^11.3, its
-        // square below 2^23; the floor's (within the largest margin) and the
-        // heading's Q12 >> 4 each below 2^23; the sum times sigmas^2 (at
-        // most 64) below 2^30. The heading's is asked for only now: most
-        // cones that meet two walls are past the largest margin.
-        let apart = apart >> 10;
-        let heading_range2 = heading_range2().clamp(0, MAX_VARIANCE_Q12);
-        let floor = floor.0.clamp(0, CORNER_MARGIN_MAX.0);
-        let floor_cs = mul_hi(floor, cs) >> 10;
-        let sigmas = sigmas.clamp(0, 8);
-        if apart * apart >= sigmas * sigmas * (floor_cs * floor_cs + (heading_range2 >> 4)) {
-            return Some(0);
-        }
-        // heading_range2 / cs^2: 1/cs = 2^30/cs is reciprocal(cs << sh)
-        // 2^(sh - 32); two high words and the shift back, saturated at
-        // the largest margin's square
-        let (x, sh) = crate::math::normalize(cs.max(1) as u32);
-        let inv = reciprocal(x);
-        let (scaled, up) = (mul_hi_u(mul_hi_u(heading_range2 as u32, inv), inv), (2 * sh).min(31));
-        let spread = if scaled > (MAX_VARIANCE_Q12 as u32) >> up { MAX_VARIANCE_Q12 } else { (scaled << up) as i32 };
-        Some((mul_hi(floor, floor) << 12).saturating_add(spread))
-    }
-
-    /// True when the nearest points in the cone on the two candidate walls
-    /// are less than `margin` (at most [`CORNER_MARGIN_MAX`]) apart in
-    /// range. Division-free:
-    /// `|A_x n_y - A_y n_x| < margin n_x n_y` with the cone cosines `n`.
-    #[inline(always)]
-    pub fn near_corner(&self, margin: Length) -> bool {
-        let Corner::Cross { cross, other_cross, other_normal } = self.corner else {
-            return false;
-        };
-        // The products were made choosing the wall: in Q14 mm by mul_hi
-        // (Q16 * Q30 / 2^32), each within 3 LSB (2^-12 mm) below the exact
-        // one; A >= 0 and 0 <= n <= 2^30 keep each in [0, 2^29), their
-        // difference in i32.
-        // n n in Q28 (<= 2^28), << 2 -> Q30; margin (Q16) times it -> Q14.
-        let cs = mul_cos(other_normal, self.cone_normal) << 2;
-        let margin = margin.0.clamp(0, CORNER_MARGIN_MAX.0);
-        (cross - other_cross).abs() < mul_hi(margin, cs)
-    }
-
     /// The expected lidar model output (distance from the reference point
     /// along the beam): `to_wall / cone_normal - setback`. `None` when the
     /// cone's cosine is below 1/1024 (the division would blow up). One
@@ -428,7 +335,7 @@ pub fn expected_heading(pose: &Pose) -> Angle {
 #[cfg(test)]
 #[allow(clippy::restriction)] // test code: a panic fails the test
 mod tests {
-    use super::cone::nearer_of;
+    use super::cone::{mul_cos, nearer_of};
     use super::*;
 
     /// The reference: the wall the nearest point in the cone is on, found
