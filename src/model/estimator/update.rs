@@ -435,9 +435,10 @@ mod tests {
         assert_eq!(sure.corner_variance(&beam, short), Some(0));
     }
 
-    /// The corner's part of a reading's `r` (scaled by the cone's cos^2).
+    /// The corner's part of a reading's `r` (scaled by the cone's cos^2, as
+    /// `with_corner` adds it to a noise of 0).
     fn corner_part(f: &Filter, beam: &Beam, z: Length) -> i32 {
-        let cos2 = (mul_hi(beam.cone_normal, beam.cone_normal) << 2).min(ONE);
-        mul_q30_unsat(f.corner_variance(beam, z).unwrap(), cos2)
+        let cos2 = mul_hi(beam.cone_normal, beam.cone_normal) << 2;
+        f.with_corner(0, cos2, beam, z).unwrap()
     }
 }
