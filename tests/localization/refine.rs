@@ -104,9 +104,11 @@ pub(crate) static EVALUATIONS: AtomicU64 = AtomicU64::new(0);
 
 /// Half the lidar's cone, radians.
 const HALF_CONE: f64 = config::lidar::CONE_DEG / 2.0 * PI / 180.0;
-/// A reading's growth of sigma with incidence, the estimator's (with its
-/// `config::estimator::LIDAR_SIGMA` at square), mm.
-const INCIDENCE_SIGMA_MM: f64 = config::estimator::LIDAR_INCIDENCE_SIGMA_MM;
+/// A reading's growth of sigma with incidence, a share of its range per
+/// unit of `tan(incidence)` (with `config::estimator::LIDAR_SIGMA` at
+/// square), and the incidence past which a reading says nothing, radians.
+const INCIDENCE_SPREAD: f64 = config::refine::INCIDENCE_SPREAD;
+const MAX_INCIDENCE: f64 = config::refine::MAX_INCIDENCE_DEG * PI / 180.0;
 /// The loss's scale, sigmas (Welsch): a reading this far off weighs about
 /// a third, one much farther almost nothing (spurious echoes, corners).
 const ROBUST: f64 = 3.0;
@@ -119,9 +121,9 @@ const TURN_SIGMA_DEG: f64 = 1.5;
 /// compass (`config::estimator::COMPASS_SIGMA_DEG`) or a disturbed floor
 /// (the 12 degrees) ...
 const BIAS_MIX: (f64, f64, f64) = (0.7, config::estimator::COMPASS_SIGMA_DEG, 12.0);
-/// ... and each view's apart from it (the lab's views agree within a
-/// degree or two, the hard world's spread by 5 to 8).
-const VIEW_MIX: (f64, f64, f64) = (0.7, 1.5, 6.0);
+/// ... and each view's apart from it (the compass's own spread, or a
+/// floor disturbed unevenly: the hard world's views spread by 5 to 8).
+const VIEW_MIX: (f64, f64, f64) = (0.7, config::estimator::COMPASS_SIGMA_DEG, 12.0);
 /// The lever's prior, mm: the pivot anywhere the estimator allows
 /// (`config::estimator::PIVOT_MIN_MM` to `PIVOT_MAX_MM` behind the axle,
 /// the axle `config::geometry::ROTATION_TO_REFERENCE` behind the reference
@@ -270,7 +272,13 @@ impl Problem<'_> {
                 let Some(z) = z else { continue };
                 let (beam, along) = beam_of(lidar, theta);
                 let r = expected(x, y, beam, along, share).map_or(2.0 * ROBUST, |(e, incidence, span)| {
-                    let slope = INCIDENCE_SIGMA_MM * incidence.tan().min(4.0);
+                    // the incidence the range is read at: the axis's, or
+                    // the cone's nearest point's
+                    let read = if share >= 0.5 { incidence } else { (incidence - HALF_CONE).max(0.0) };
+                    if read > MAX_INCIDENCE {
+                        return 1.0;
+                    }
+                    let slope = INCIDENCE_SPREAD * z * incidence.tan().min(4.0);
                     (z - e) / (square.powi(2) + slope.powi(2) + (span / 2.0).powi(2)).sqrt()
                 });
                 out.push((r, true));

@@ -59,6 +59,15 @@ impl Share {
             Share::Axis => 1 << 30,
         }
     }
+
+    /// The cosine of the incidence the range is read at (Q30): the cone's
+    /// nearest point's, or the axis's.
+    fn read_normal(self, beam: &crate::model::measurement::Beam) -> i32 {
+        match self {
+            Share::Nearest => beam.cone_normal,
+            Share::Axis => beam.normal,
+        }
+    }
 }
 
 /// Q24 costs from the config's (sigmas squared).

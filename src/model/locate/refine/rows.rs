@@ -111,11 +111,17 @@ const LEVER_MEAN: i64 = Length::from_mm_f64(
 .0 as i64;
 const LEVER_INV: i64 = inv((est::PIVOT_MAX_MM - est::PIVOT_MIN_MM) / 3.0 * 65536.0);
 /// A lidar reading's variance, mm^2 Q16: the model's spread at square,
-/// its growth with the axis's incidence (`tan^2`, at most 16: 76
-/// degrees, the reference's bound), a corner's mixed returns.
+/// its growth with the range and the axis's incidence (the range's share
+/// squared, Q16, times `tan^2`, at most 16: 76 degrees, the reference's
+/// bound), a corner's mixed returns.
 const LIDAR_VAR: i64 = (est::LIDAR_SIGMA.0 as i64 * est::LIDAR_SIGMA.0 as i64) >> 16;
-const INCIDENCE_VAR: i64 = (est::LIDAR_INCIDENCE_SIGMA_MM * est::LIDAR_INCIDENCE_SIGMA_MM * 65536.0) as i64;
+const SPREAD: i64 = (cfg::INCIDENCE_SPREAD * 65536.0) as i64;
 const CORNER_VAR: i64 = (cfg::CORNER_SIGMA_MM * cfg::CORNER_SIGMA_MM * 65536.0) as i64;
+/// The incidence limit's cosine, Q30: a range read at a cosine below
+/// this (the axis's or the cone's nearest point's, `Share::read_normal`)
+/// says nothing ([`cfg::MAX_INCIDENCE_DEG`]).
+const MIN_NORMAL: i32 =
+    (crate::math::cos_f64(cfg::MAX_INCIDENCE_DEG * core::f64::consts::PI / 180.0) * Q30 as f64) as i32;
 const TAN2_MAX: i64 = 16 << 16;
 const Q30: i64 = 1 << 30;
 /// 1/1000 in Q30: a derivative per rad to one per mrad.
@@ -322,6 +328,11 @@ impl Model<'_> {
         let pose = Pose::new(Coord::from_length(Length(x as i32)), Coord::from_length(Length(y as i32)), theta);
         let beam = Beam::new(self.arena, &pose, &id.mount());
         let share = self.share.q30();
+        // read too far from square: a reading within the noise, no
+        // derivative (`cfg::MAX_INCIDENCE_DEG`)
+        if self.share.read_normal(&beam) < MIN_NORMAL {
+            return Row::new(ONE_SIGMA, Loss::Robust);
+        }
         let spread = i64::from(beam.spot_spread(z).0);
         let nu = i64::from(beam.normal_miss(z).0).saturating_sub(mul_shr(spread, share, 30));
         // d(nu)/d(reference point) is +1 along the wall's normal for the
@@ -347,7 +358,7 @@ impl Model<'_> {
         };
         let per_rad = signed(swing).saturating_add(turning);
         let per_mrad = mul_shr(per_rad, PER_MRAD, 30);
-        let inv = self.inverse_sigma(&beam);
+        let inv = self.inverse_sigma(&beam, z);
         let per = |v: i64| mul_shr(v, inv, 28);
         let (px, py) = if on_x { (signed(MM), 0) } else { (0, signed(MM)) };
         let dt = per(per_mrad);
@@ -361,15 +372,17 @@ impl Model<'_> {
         }
     }
 
-    /// `2^40 / sigma` of a reading along its wall's normal (Q16 mm): the
-    /// range's variance (the model's spread, the incidence's, a corner's)
-    /// times the squared cosine the miss is measured with (the cone's
-    /// nearest point's, or the axis's at the axis's share).
-    fn inverse_sigma(&self, beam: &Beam) -> i64 {
+    /// `2^40 / sigma` of a reading `z` along its wall's normal (Q16 mm): the
+    /// range's variance (the model's spread, the incidence's at that
+    /// range, a corner's) times the squared cosine the miss is measured
+    /// with (the cone's nearest point's, or the axis's at the axis's
+    /// share).
+    fn inverse_sigma(&self, beam: &Beam, z: Length) -> i64 {
         let (cone, axis) = (i64::from(beam.cone_normal), i64::from(beam.normal));
         let axis2 = mul_shr(axis, axis, 30);
         let tan2 = quotient(Q30.saturating_sub(axis2) as u32, axis2.max(0) as u64, 16).min(TAN2_MAX as u64) as i64;
-        let mut var = LIDAR_VAR.saturating_add(mul_shr(INCIDENCE_VAR, tan2, 16));
+        let spread = mul_shr(i64::from(z.0), SPREAD, 16);
+        let mut var = LIDAR_VAR.saturating_add(mul_shr(mul_shr(spread, spread, 16), tan2, 16));
         if beam.near_corner(cfg::CORNER_MARGIN) {
             var = var.saturating_add(CORNER_VAR);
         }

@@ -155,3 +155,37 @@ fn the_config_logarithm_is_the_logarithm() {
         assert!((crate::math::ln_f64(x) - x.ln()).abs() < 1e-9, "{x}");
     }
 }
+
+/// The front lidar's row of a one-view survey at (x, y) mm facing `deg`
+/// (the reference point on the pivot), reading `z_mm`.
+fn front_row(x: f64, y: f64, deg: f64, z_mm: f64) -> rows::Row {
+    let views =
+        [Readings { heading: Angle::from_degrees_f64(deg), front: Some(Length::from_mm_f64(z_mm)), right: None }];
+    let model = rows::Model { arena: &ARENA, views: &views, turns: &[], share: Share::Axis, near: (0, 0, NEAR_INV) };
+    let mut p: Params = [0; MAX_PARAMS];
+    (p[PX], p[PY]) = (Length::from_mm_f64(x).0.into(), Length::from_mm_f64(y).0.into());
+    p[HEADING] = Angle::from_degrees_f64(deg).0.into();
+    let mut first = None;
+    model.rows(&p, true, 0, 1, |row| first = Some(*row));
+    first.expect("the front reading's row")
+}
+
+/// A reading's spread off square grows with its range
+/// (`config::refine::INCIDENCE_SPREAD`): at 45 degrees on the east wall,
+/// one of 400 mm is half as sure as one of 200 (its derivatives, in its
+/// sigmas, half: sqrt(2^2 + 20^2) mm against sqrt(2^2 + 10^2)); past the
+/// incidence limit (`config::refine::MAX_INCIDENCE_DEG`) a reading costs
+/// one sigma and moves nothing, just inside it a row as any.
+#[test]
+fn a_readings_sigma_grows_with_range_and_glancing_readings_say_nothing() {
+    let d_px = |row: &rows::Row| row.cols().iter().find(|c| usize::from(c.0) == PX).map(|c| f64::from(c.1).abs());
+    let (near, far) = (front_row(562.5, 50.0, 45.0, 200.0), front_row(562.5, 50.0, 45.0, 400.0));
+    let ratio = d_px(&near).unwrap() / d_px(&far).unwrap();
+    let want = (4.0f64 + 20.0 * 20.0).sqrt() / (4.0f64 + 10.0 * 10.0).sqrt();
+    assert!((ratio - want).abs() < 0.03 * want, "{ratio} against {want}");
+    // the east wall 62.5 mm ahead along x: 65 degrees off square, then 55
+    let glancing = front_row(700.0, 50.0, 65.0, 150.0);
+    assert_eq!((glancing.r, glancing.cols().len()), (rows::ONE_SIGMA as i32, 0));
+    let inside = front_row(700.0, 50.0, 55.0, 110.0);
+    assert!(d_px(&inside).is_some_and(|d| d > 0.0), "{inside:?}");
+}
