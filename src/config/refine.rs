@@ -36,9 +36,10 @@ pub const BIAS_MIX: (f64, f64, f64) = (0.7, estimator::COMPASS_SIGMA_DEG, 12.0);
 /// unevenly (the reference point moves as the body turns about its pivot,
 /// and the hard world's views spread by 5 to 8 degrees, up to the issue's
 /// 12). Measured (1,000 hard power-ups, `tests/localization/localize.rs`,
-/// with `INCIDENCE_SPREAD` and `MAX_INCIDENCE_DEG`): 894 right; with the
-/// narrow part at 1.5 degrees, as before, 870; with the wide part at 20
-/// or the shares even, 883 to 888.
+/// with `INCIDENCE_SPREAD`, `MAX_INCIDENCE_DEG` and, in that earlier
+/// combination, a view's median taken as less noisy): 888 right, against
+/// 870 with the narrow part at 1.5 degrees and the wide at 6, as before;
+/// the wide part at 20 or the shares even, 883 to 887.
 pub const VIEW_MIX: (f64, f64, f64) = (0.7, estimator::COMPASS_SIGMA_DEG, 12.0);
 /// A reading's spread off square grows with its range: its beam's spot
 /// spreads along the wall by about the range times the cone's width, so
@@ -50,11 +51,12 @@ pub const VIEW_MIX: (f64, f64, f64) = (0.7, estimator::COMPASS_SIGMA_DEG, 12.0);
 /// product). Measured on the hard world's turns at the true pose, the
 /// readings' spread grows with range (at 45-60 degrees 30, 49 and 95 mm,
 /// robust spread, below 250 mm, to 450 and beyond); 1,000 hard power-ups:
-/// 894 right, 887 with the fixed 15 mm.
+/// 893 right, 887 with the fixed 15 mm.
 pub const INCIDENCE_SPREAD: f64 = 0.05;
-/// A reading whose beam's axis meets its wall farther than this from
-/// square on says nothing of the pose, degrees: its row costs a reading
-/// within the noise and moves no parameter. Past it the range moves by
+/// A reading whose range is read farther than this from square on (the
+/// beam's axis, or the cone's nearest point, as the fit's start reads
+/// it) says nothing of the pose, degrees: its row costs a reading within
+/// the noise and moves no parameter. Past it the range moves by
 /// 1.7 times itself and more per radian of the heading, and a turn's
 /// heading at a reading, drawn between its two views' headings in
 /// proportion to its tick, is good to a degree or so, and the cone's
@@ -62,10 +64,9 @@ pub const INCIDENCE_SPREAD: f64 = 0.05;
 /// axis meets. Measured at the true pose in the hard world with its lidar
 /// noise, mixed returns and spurious echoes all off, the readings past 60
 /// degrees miss the model's range by 40 to 117 mm (robust spread) against
-/// its 35 to 40, those below 45 by 3 to 4 mm. 1,000 hard power-ups: 894
-/// right at 60, 865 with no limit,
-/// and a plateau about it (with the older view prior: 873 at 55, 870 at
-/// 60, 859 at 70).
+/// its 35 to 40, those below 45 by 3 to 4 mm. 1,000 hard power-ups: 893
+/// right at 60, 865 with no limit, and a plateau about it (an earlier
+/// combination: 873 at 55, 870 at 60, 859 at 70).
 pub const MAX_INCIDENCE_DEG: f64 = 60.0;
 /// A reading whose cone meets two walls within this of each other, mm,
 /// is near a corner: the estimator's cut for mixed returns
