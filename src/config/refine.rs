@@ -122,6 +122,6 @@ pub const MAX_TRIES: u8 = 6;
 /// `Beam` and its noise, about 5,000 lx106 instructions with its
 /// derivatives, so 32 take about a fifth of the 10 ms tick, and a pass's
 /// end (the step's solve) a little more: under the search's third
-/// (`lx106/BENCHMARKS.md`, "Refining the fix": 214,201 at worst, 26.7 %;
+/// (`lx106/BENCHMARKS.md`, "Refining the fix": 210,615 at worst, 26.3 %;
 /// with every start tried 233,459, 29.1 %).
 pub const ROWS_PER_STEP: usize = 32;

@@ -235,14 +235,10 @@ impl Beam {
         heading_range2: impl FnOnce() -> i32,
         sigmas: i32,
     ) -> Option<i32> {
-        let Corner::Cross { cross, other_cross, other_normal } = self.corner else {
+        let Some((apart, cs)) = self.corner_apart() else {
             return Some(0);
         };
-        // n_a n_b in Q30 (as `near_corner`); the walls' distance apart
-        // times it, in Q14 mm (below 2^29)
-        let cs = mul_cos(other_normal, self.cone_normal) << 2;
-        let apart = (cross - other_cross).abs();
-        if apart < mul_hi(mixed.0.clamp(0, CORNER_MARGIN_MAX.0), cs) {
+        if within(apart, cs, mixed) {
             return None;
         }
         if apart >= mul_hi(CORNER_MARGIN_MAX.0, cs) {
@@ -277,18 +273,36 @@ impl Beam {
     /// are less than `margin` (at most [`CORNER_MARGIN_MAX`]) apart in
     /// range. Division-free:
     /// `|A_x n_y - A_y n_x| < margin n_x n_y` with the cone cosines `n`.
+    // tick bar (see Incidence)
     #[inline(always)]
     pub fn near_corner(&self, margin: Length) -> bool {
+        self.corner_apart().is_some_and(|(apart, cs)| within(apart, cs, margin))
+    }
+
+    /// The two candidate walls' distance apart times `cs`, Q14 mm (below
+    /// 2^29), and `cs`, their cone cosines' product `n_a n_b` in Q30; `None`
+    /// when the cone meets one wall.
+    // tick bar (see Incidence)
+    #[inline(always)]
+    fn corner_apart(&self) -> Option<(i32, i32)> {
         let Corner::Cross { cross, other_cross, other_normal } = self.corner else {
-            return false;
+            return None;
         };
         // The products were made choosing the wall: in Q14 mm by mul_hi
         // (Q16 * Q30 / 2^32), each within 3 LSB (2^-12 mm) below the exact
         // one; A >= 0 and 0 <= n <= 2^30 keep each in [0, 2^29), their
         // difference in i32.
-        // n n in Q28 (<= 2^28), << 2 -> Q30; margin (Q16) times it -> Q14.
+        // n n in Q28 (<= 2^28), << 2 -> Q30.
         let cs = mul_cos(other_normal, self.cone_normal) << 2;
-        let margin = margin.0.clamp(0, CORNER_MARGIN_MAX.0);
-        (cross - other_cross).abs() < mul_hi(margin, cs)
+        Some(((cross - other_cross).abs(), cs))
     }
+}
+
+/// The walls `apart` (times `cs`, Q14 mm; [`Beam::corner_apart`]) are
+/// less than `margin` (at most [`CORNER_MARGIN_MAX`]) apart: the margin
+/// (Q16) times `cs` (Q30) is Q14.
+// tick bar (see Incidence)
+#[inline(always)]
+fn within(apart: i32, cs: i32, margin: Length) -> bool {
+    apart < mul_hi(margin.0.clamp(0, CORNER_MARGIN_MAX.0), cs)
 }

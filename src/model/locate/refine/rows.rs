@@ -375,10 +375,10 @@ impl Model<'_> {
     /// `2^40 / sigma` of a reading `z` along its wall's normal (Q16 mm): the
     /// range's variance (the model's spread, the incidence's at that
     /// range, a corner's) times the squared cosine the miss is measured
-    /// with (the cone's nearest point's, or the axis's at the axis's
-    /// share).
+    /// with (the cone's nearest point's, or the axis's:
+    /// `Share::read_normal`).
     fn inverse_sigma(&self, beam: &Beam, z: Length) -> i64 {
-        let (cone, axis) = (i64::from(beam.cone_normal), i64::from(beam.normal));
+        let axis = i64::from(beam.normal);
         let axis2 = mul_shr(axis, axis, 30);
         let tan2 = quotient(Q30.saturating_sub(axis2) as u32, axis2.max(0) as u64, 16).min(TAN2_MAX as u64) as i64;
         let spread = mul_shr(i64::from(z.0), SPREAD, 16);
@@ -386,7 +386,7 @@ impl Model<'_> {
         if beam.near_corner(cfg::CORNER_MARGIN) {
             var = var.saturating_add(CORNER_VAR);
         }
-        let cos = cone.saturating_sub(mul_shr(cone.saturating_sub(axis), self.share.q30(), 30));
+        let cos = i64::from(self.share.read_normal(beam));
         let var = mul_shr(var, mul_shr(cos, cos, 30), 30);
         // Q8 from the variance's Q16, then Q16; at least a sixteenth of a
         // mm (a beam along the wall)
