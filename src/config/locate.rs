@@ -101,10 +101,12 @@ pub const TURN_MRAD_S: i32 = super::goto::TURN_MRAD_S;
 /// refining the search's fix (`model::locate::turns`): a one-step turn
 /// (327 ms at `TURN_MRAD_S`, 32 whole ticks) brings ten, a lidar's
 /// reading every 3.3 ticks (`tests/localization/localize.rs`); a longer
-/// one keeps every second, third, ... pair. 6 bytes each, 92 B a turn on
-/// the robot, up to seven turns (`model::locate::MAX_VIEWS` views) kept
-/// by the survey: 648 B, in the controller, which lives on the ROM's
-/// stack (`firmware::robot::run`'s frame), not in the image's DRAM budget.
+/// one keeps every second, third, ... pair. 8 bytes each (each lidar's
+/// tick and distance), 116 B a turn on the robot, up to seven turns
+/// (`model::locate::MAX_VIEWS` views) kept by the survey: 812 B, in the
+/// controller, which lives on the ROM's stack (`firmware::robot::run`'s
+/// frame), not in the image's DRAM budget (`cargo fw-image`: the stack's
+/// worst case 14,144 of 14,272 B).
 pub const TURN_SAMPLES: usize = 12;
 /// The body stands this long after a turn before its view is taken,
 /// ms: the servos stop within a tick (data `servo_runs.csv`), and a

@@ -380,12 +380,12 @@ fn the_turns_between_views_keep_the_readings_taken_on_them() {
     // the one-step turn: a pair every 3 ticks, the right lidar's reading
     // and the front's 2 ticks later; the last front reading came on the
     // tick that ended the turn (32), before the survey's tick
-    let ticks_of = |t: &Turn| t.samples().iter().map(|s| s.tick).collect::<std::vec::Vec<_>>();
+    let ticks_of = |t: &Turn| t.samples().iter().map(|s| s.first_tick()).collect::<std::vec::Vec<_>>();
     assert_eq!(ticks_of(&t[0]), (0..=30).step_by(3).collect::<std::vec::Vec<u16>>());
-    assert_eq!(t[0].samples()[10], TurnSample { tick: 30, front_mm: 232, right_mm: 430 });
+    assert_eq!(t[0].samples()[10], TurnSample { front_tick: 32, front_mm: 232, right_tick: 30, right_mm: 430 });
     // the two-step turn: every second pair, spread over all of it
     assert_eq!(ticks_of(&t[1]), (0..=60).step_by(6).collect::<std::vec::Vec<u16>>());
-    assert_eq!(t[1].samples()[1], TurnSample { tick: 6, front_mm: 208, right_mm: 406 });
+    assert_eq!(t[1].samples()[1], TurnSample { front_tick: 8, front_mm: 208, right_tick: 6, right_mm: 406 });
 
     // on to the answer (the search's, of these four views: a fix it
     // cannot vouch for, which ends the survey): the turns stay one fewer
@@ -408,7 +408,10 @@ fn a_survey_of_all_its_views_keeps_a_turn_between_each_two() {
     // (handed in on the ticks after those), the first twelve kept
     for t in turns {
         assert_eq!((t.clockwise, t.ticks, t.samples().len()), (true, 32, 12));
-        assert_eq!(t.samples().first(), Some(&TurnSample { tick: 1, front_mm: 400, right_mm: 400 }));
+        assert_eq!(
+            t.samples().first(),
+            Some(&TurnSample { front_tick: 1, front_mm: 400, right_tick: 1, right_mm: 400 })
+        );
     }
 }
 

@@ -13,23 +13,42 @@ use crate::model::measurement::LidarId;
 /// a longer turn keeps every second, third, ... pair ([`Turn::push`]).
 pub const SAMPLES: usize = cfg::TURN_SAMPLES;
 
-/// One pair of readings during a turn: the tick it came at (counted from
-/// the turn's start) and each lidar's distance, whole mm (0: none).
+/// One pair of readings during a turn: each lidar's distance, whole mm
+/// (0: none), and the tick it came at (counted from the turn's start).
+/// The two lidars range on their own clocks, so a pair's second reading
+/// comes up to a lidar period (3.3 ticks, 4.6 degrees of a turn) after
+/// its first: each keeps its own tick.
 #[derive(Clone, Copy, PartialEq, Eq, Debug, Default)]
 pub struct TurnSample {
-    pub tick: u16,
+    pub front_tick: u16,
     pub front_mm: u16,
+    pub right_tick: u16,
     pub right_mm: u16,
 }
 
 impl TurnSample {
     /// A lidar's distance in this sample, if it gave one.
     pub fn distance(&self, id: LidarId) -> Option<Length> {
-        let mm = match id {
-            LidarId::Front => self.front_mm,
-            LidarId::Right => self.right_mm,
+        self.reading(id).map(|(_, d)| d)
+    }
+
+    /// A lidar's reading in this sample, if it gave one: the tick it came
+    /// at, and its distance.
+    pub fn reading(&self, id: LidarId) -> Option<(u16, Length)> {
+        let (tick, mm) = match id {
+            LidarId::Front => (self.front_tick, self.front_mm),
+            LidarId::Right => (self.right_tick, self.right_mm),
         };
-        (mm != 0).then(|| Length::from_mm(i32::from(mm)))
+        (mm != 0).then(|| (tick, Length::from_mm(i32::from(mm))))
+    }
+
+    /// The tick the pair's first reading came at.
+    pub fn first_tick(&self) -> u16 {
+        match (self.front_mm, self.right_mm) {
+            (0, _) => self.right_tick,
+            (_, 0) => self.front_tick,
+            _ => self.front_tick.min(self.right_tick),
+        }
     }
 }
 
@@ -65,14 +84,14 @@ impl Turn {
     /// the pair under way until that lidar reads again, which closes it.
     pub fn push(&mut self, id: LidarId, tick: u16, d: Length) {
         let mm = d.to_mm().clamp(1, i32::from(u16::MAX)) as u16;
-        let mut pair = self.pending.unwrap_or(TurnSample { tick, ..TurnSample::default() });
+        let mut pair = self.pending.unwrap_or_default();
         if pair.distance(id).is_some() {
             self.close(pair);
-            pair = TurnSample { tick, ..TurnSample::default() };
+            pair = TurnSample::default();
         }
         match id {
-            LidarId::Front => pair.front_mm = mm,
-            LidarId::Right => pair.right_mm = mm,
+            LidarId::Front => (pair.front_tick, pair.front_mm) = (tick, mm),
+            LidarId::Right => (pair.right_tick, pair.right_mm) = (tick, mm),
         }
         self.pending = Some(pair);
     }
@@ -115,8 +134,9 @@ mod tests {
         let s = t.samples();
         assert_eq!(t.ticks, 33);
         assert_eq!(s.len(), 3);
-        assert_eq!(s[0], TurnSample { tick: 2, front_mm: 300, right_mm: 200 });
-        assert_eq!(s[1], TurnSample { tick: 5, front_mm: 310, right_mm: 0 });
+        assert_eq!(s[0], TurnSample { front_tick: 2, front_mm: 300, right_tick: 3, right_mm: 200 });
+        assert_eq!(s[1], TurnSample { front_tick: 5, front_mm: 310, right_tick: 0, right_mm: 0 });
+        assert_eq!((s[0].first_tick(), s[1].first_tick()), (2, 5));
         assert_eq!(s[2].distance(LidarId::Front), Some(mm(320)));
         assert_eq!(s[2].distance(LidarId::Right), None);
     }
@@ -128,7 +148,7 @@ mod tests {
             t.push(LidarId::Front, 3 * k, mm(100 + i32::from(k)));
         }
         t.end(99);
-        let ticks: Vec<u16> = t.samples().iter().map(|s| s.tick).collect();
+        let ticks: Vec<u16> = t.samples().iter().map(|s| s.first_tick()).collect();
         assert_eq!(ticks, (0..10).map(|k| 9 * k).collect::<Vec<u16>>());
         // a turn longer than its room keeps its first readings
         let mut t = Turn::new(true, 1);

@@ -265,12 +265,12 @@ impl Model<'_> {
                 f(&Row::new(mul_shr(miss, TURN_INV, 28), Loss::Robust).with(to, d).with(from, -d).with(rate_col, dr));
             }
             for s in t.samples() {
-                let done = (u64::from(s.tick).saturating_mul(per_tick) >> 16).min(1 << 16) as i64;
-                let theta = a.saturating_add(mul_shr(b.saturating_sub(a), done, 16));
-                let at = At { theta, from: (from, (1 << 16) - done), to: (to, done) };
                 for id in [LidarId::Front, LidarId::Right] {
-                    if let Some(z) = s.distance(id) {
+                    if let Some((tick, z)) = s.reading(id) {
                         if slice.take() {
+                            let done = (u64::from(tick).saturating_mul(per_tick) >> 16).min(1 << 16) as i64;
+                            let theta = a.saturating_add(mul_shr(b.saturating_sub(a), done, 16));
+                            let at = At { theta, from: (from, (1 << 16) - done), to: (to, done) };
                             f(&self.lidar(p, at, id, z, derivatives));
                         }
                     }
