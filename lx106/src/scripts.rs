@@ -395,8 +395,8 @@ pub fn compass_sample(h: Angle, rng: &mut Rng) -> CompassSample {
 // ------------------------------------------------------------ control loop
 
 /// The state after one tick: (x, y, theta, theta_frac, digest of the rest
-/// (covariance, servo commands, mode, faults, sensor health, dead-reckoned
-/// pose), output lines so far, FNV-1a of all output so far).
+/// (covariance, servo commands, mode, faults, sensor health, the scripted
+/// body's pose), output lines so far, FNV-1a of all output so far).
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
 pub struct TickRec(pub i64, pub i64, pub u32, pub u16, pub u32, pub u32, pub u32);
 
@@ -441,39 +441,44 @@ impl LineSink for EchoSink<'_> {
 pub fn run_control(mut rec: impl FnMut(TickRec), echo: &mut dyn FnMut(&str)) {
     let arena = Arena::DEFAULT;
     let mut rng = Rng(0x5eed_1e55);
-    let mut c = controller(Pose::from_mm(380, 250, Angle::ZERO));
+    let start = Pose::from_mm(380, 250, Angle::ZERO);
+    let mut c = controller(start);
     let mut sink = EchoSink { hash: HashSink { hash: FNV0, lines: 0 }, echo };
+    // the scripted world's body: driven by the servos' motion over each
+    // tick (the state update alone; a `pose` command does not move it)
+    let (mut body, mut moving, mut dt) = (start, Motion::Stop, Dt::from_micros_saturating(0));
     // the microsecond counter wraps during the run
     let mut now = 0xffff_0000u32;
     for tick in 0..TICKS {
+        body = step(&body, moving, dt);
         for (t, line) in COMMANDS {
             if *t == tick {
                 c.feed_bytes(line, &mut sink);
             }
         }
-        // sensors: what they would read at the dead-reckoned pose, noisy
-        let dead = c.dead_reckoned();
+        // sensors: what they would read at the body, noisy
         let front_fault = (40..43).contains(&tick) || tick == 300;
         if front_fault {
             c.front().next = Some(Err(nb::Error::Other(SensorError::Bus)));
         } else if tick % 3 == 0 {
-            let d = expected_lidar(&arena, &dead, LidarId::Front);
+            let d = expected_lidar(&arena, &body, LidarId::Front);
             c.front().next = Some(Ok(lidar_sample(LidarId::Front, d, rng.pm(8))));
         }
         // the right lidar goes silent for a while (timeout, then re-init)
         if tick % 3 == 1 && !(180..260).contains(&tick) {
-            let d = expected_lidar(&arena, &dead, LidarId::Right);
+            let d = expected_lidar(&arena, &body, LidarId::Right);
             c.right().next = Some(Ok(lidar_sample(LidarId::Right, d, rng.pm(8))));
         }
         if tick == 77 {
             c.compass().next = Some(Err(nb::Error::Other(SensorError::BadSample)));
         } else if tick % 5 == 2 {
-            let h = expected_heading(&dead).wrapping_add(Angle::from_millidegrees(rng.pm(2_000)));
+            let h = expected_heading(&body).wrapping_add(Angle::from_millidegrees(rng.pm(2_000)));
             c.compass().next = Some(Ok(compass_sample(h, &mut rng)));
         }
         c.tick(now, &mut sink);
         // 10 ms +- 0.5 ms; a 20 ms overrun now and then
-        now = now.wrapping_add(if tick % 97 == 50 { 20_000 } else { (10_000 + rng.pm(500)) as u32 });
+        let next = now.wrapping_add(if tick % 97 == 50 { 20_000 } else { (10_000 + rng.pm(500)) as u32 });
+        (moving, dt, now) = (c.applied().motion, Dt::from_micros_saturating(next.wrapping_sub(now)), next);
 
         let p = c.pose();
         let mut h = FNV0;
@@ -491,7 +496,7 @@ pub fn run_control(mut rec: impl FnMut(TickRec), echo: &mut dyn FnMut(&str)) {
         for s in [c.front_health(), c.right_health(), c.compass_health()] {
             h = fnv_i64(h, i64::from(s.up) | i64::from(s.reinits) << 1);
         }
-        let d = c.dead_reckoned();
+        let d = body;
         h = fnv_i64(h, d.x.0);
         h = fnv_i64(h, d.y.0);
         h = fnv_i64(h, i64::from(d.theta.0));

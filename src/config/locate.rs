@@ -106,7 +106,7 @@ pub const TURN_MRAD_S: i32 = super::goto::TURN_MRAD_S;
 /// (`model::locate::MAX_VIEWS` views) kept by the survey: 812 B, in the
 /// controller, which lives on the ROM's stack (`firmware::robot::run`'s
 /// frame), not in the image's DRAM budget (`cargo fw-image`: the stack's
-/// worst case 14,144 of 14,272 B).
+/// worst case 14,096 of 14,272 B).
 pub const TURN_SAMPLES: usize = 12;
 /// The body stands this long after a turn before its view is taken,
 /// ms: the servos stop within a tick (data `servo_runs.csv`), and a

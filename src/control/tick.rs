@@ -87,7 +87,7 @@ use crate::driver::{HeadingSensor, RangeSensor, Servos};
 use crate::math::Dt;
 use crate::model::estimator::{Estimator, Update};
 use crate::model::measurement::{Arena, LidarId};
-use crate::model::{advance, ActuatorModel, Drive, Motion, Pose};
+use crate::model::{ActuatorModel, Drive, Motion, Pose};
 pub use clock::TICK_US;
 use localizing::Localizing;
 use mission_run::Missions;
@@ -123,7 +123,11 @@ pub struct Controller<H: Hardware> {
     applied: Drive,
     /// The pose estimate (state update corrected by the sensors).
     estimator: Estimator,
-    /// Dead-reckoned pose (the state update alone).
+    /// Dead-reckoned pose (the state update alone): a host instrument
+    /// (the simulator's summary and tests compare the estimate with it);
+    /// nothing on the robot reads it, so the robot's tick does not keep it
+    /// (139 lx106 instructions a tick, lx106/BENCHMARKS.md).
+    #[cfg(feature = "std")]
     dead: Pose,
     faults: FaultCounters,
     /// Telemetry, the on-board log's rows and `dump`: when they are due.
@@ -192,6 +196,7 @@ impl<H: Hardware> Controller<H> {
             mode: Mode::Idle,
             applied: model.stop(),
             estimator: Estimator::with_arena(pose, arena),
+            #[cfg(feature = "std")]
             dead: pose,
             reports: Reports::new(),
             front_went_last: false,
@@ -272,7 +277,8 @@ impl<H: Hardware> Controller<H> {
         while left > 0 && n < MAX_STEPS {
             let dt = Dt::from_micros_saturating(left);
             self.estimator.predict(motion, dt);
-            advance(&mut self.dead, motion, dt); // in place: no copy of the pose
+            #[cfg(feature = "std")]
+            crate::model::advance(&mut self.dead, motion, dt); // in place: no copy of the pose
             left = left.saturating_sub(dt.as_micros()); // dt <= left
             n = n.saturating_add(1); // n < MAX_STEPS
         }

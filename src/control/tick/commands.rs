@@ -126,7 +126,10 @@ impl<H: Hardware> Controller<H> {
     /// Sets the estimate (and the dead-reckoned pose) to `pose`.
     pub(super) fn set_pose(&mut self, pose: Pose) {
         self.estimator.reset(pose);
-        self.dead = pose;
+        #[cfg(feature = "std")]
+        {
+            self.dead = pose;
+        }
     }
 
     pub(super) fn respond(&mut self, r: &Response, sink: &mut impl LineSink) {

@@ -111,7 +111,10 @@ impl<H: Hardware> Controller<H> {
         match result {
             Ok(fix) => {
                 self.estimator.start_at(&fix);
-                self.dead = fix.pose;
+                #[cfg(feature = "std")]
+                {
+                    self.dead = fix.pose;
+                }
                 self.report_fix(&fix, views, sink);
                 if let Some(cmd) = then {
                     self.begin(&cmd, false, sink);

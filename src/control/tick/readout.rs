@@ -22,7 +22,9 @@ impl<H: Hardware> Controller<H> {
     pub fn pose(&self) -> Pose {
         self.estimator.pose()
     }
-    /// The dead-reckoned pose (the state update alone, from the last `pose`).
+    /// The dead-reckoned pose (the state update alone, from the last `pose`
+    /// or fix; host builds only).
+    #[cfg(feature = "std")]
     pub fn dead_reckoned(&self) -> Pose {
         self.dead
     }
