@@ -50,8 +50,9 @@ pub const VIEW_MIX: (f64, f64, f64) = (0.7, estimator::COMPASS_SIGMA_DEG, 12.0);
 /// estimator takes at every range: its per-tick bar has no room for the
 /// product). Measured on the hard world's turns at the true pose, the
 /// readings' spread grows with range (at 45-60 degrees 30, 49 and 95 mm,
-/// robust spread, below 250 mm, to 450 and beyond); 1,000 hard power-ups:
-/// 893 right, 887 with the fixed 15 mm.
+/// robust spread, below 250 mm, to 450 and beyond); 1,000 hard power-ups
+/// (before each turn reading kept its own tick, `model::locate::turns`;
+/// 924 now): 893 right, 887 with the fixed 15 mm.
 pub const INCIDENCE_SPREAD: f64 = 0.05;
 /// A reading whose range is read farther than this from square on (the
 /// beam's axis, or the cone's nearest point, as the fit's start reads
@@ -64,8 +65,9 @@ pub const INCIDENCE_SPREAD: f64 = 0.05;
 /// axis meets. Measured at the true pose in the hard world with its lidar
 /// noise, mixed returns and spurious echoes all off, the readings past 60
 /// degrees miss the model's range by 40 to 117 mm (robust spread) against
-/// its 35 to 40, those below 45 by 3 to 4 mm. 1,000 hard power-ups: 893
-/// right at 60, 865 with no limit, and a plateau about it (an earlier
+/// its 35 to 40, those below 45 by 3 to 4 mm. 1,000 hard power-ups (before
+/// each turn reading kept its own tick): 893 right at 60, 865 with no
+/// limit, and a plateau about it (an earlier
 /// combination: 873 at 55, 870 at 60, 859 at 70).
 pub const MAX_INCIDENCE_DEG: f64 = 60.0;
 /// A reading whose cone meets two walls within this of each other, mm,
@@ -122,6 +124,6 @@ pub const MAX_TRIES: u8 = 6;
 /// `Beam` and its noise, about 5,000 lx106 instructions with its
 /// derivatives, so 32 take about a fifth of the 10 ms tick, and a pass's
 /// end (the step's solve) a little more: under the search's third
-/// (`lx106/BENCHMARKS.md`, "Refining the fix": 210,615 at worst, 26.3 %;
+/// (`lx106/BENCHMARKS.md`, "Refining the fix": 209,176 at worst, 26.1 %;
 /// with every start tried 233,459, 29.1 %).
 pub const ROWS_PER_STEP: usize = 32;
