@@ -126,7 +126,7 @@ pub struct Controller<H: Hardware> {
     /// Dead-reckoned pose (the state update alone): a host instrument
     /// (the simulator's summary and tests compare the estimate with it);
     /// nothing on the robot reads it, so the robot's tick does not keep it
-    /// (139 lx106 instructions a tick, lx106/BENCHMARKS.md).
+    /// (156 lx106 instructions a tick, lx106/BENCHMARKS.md).
     #[cfg(feature = "std")]
     dead: Pose,
     faults: FaultCounters,
