@@ -27,11 +27,6 @@ pub struct TurnSample {
 }
 
 impl TurnSample {
-    /// A lidar's distance in this sample, if it gave one.
-    pub fn distance(&self, id: LidarId) -> Option<Length> {
-        self.reading(id).map(|(_, d)| d)
-    }
-
     /// A lidar's reading in this sample, if it gave one: the tick it came
     /// at, and its distance.
     pub fn reading(&self, id: LidarId) -> Option<(u16, Length)> {
@@ -42,7 +37,9 @@ impl TurnSample {
         (mm != 0).then(|| (tick, Length::from_mm(i32::from(mm))))
     }
 
-    /// The tick the pair's first reading came at.
+    /// The tick the pair's first reading came at (the tests' view of which
+    /// pairs a turn kept).
+    #[cfg(test)]
     pub fn first_tick(&self) -> u16 {
         match (self.front_mm, self.right_mm) {
             (0, _) => self.right_tick,
@@ -85,7 +82,7 @@ impl Turn {
     pub fn push(&mut self, id: LidarId, tick: u16, d: Length) {
         let mm = d.to_mm().clamp(1, i32::from(u16::MAX)) as u16;
         let mut pair = self.pending.unwrap_or_default();
-        if pair.distance(id).is_some() {
+        if pair.reading(id).is_some() {
             self.close(pair);
             pair = TurnSample::default();
         }
@@ -137,8 +134,8 @@ mod tests {
         assert_eq!(s[0], TurnSample { front_tick: 2, front_mm: 300, right_tick: 3, right_mm: 200 });
         assert_eq!(s[1], TurnSample { front_tick: 5, front_mm: 310, right_tick: 0, right_mm: 0 });
         assert_eq!((s[0].first_tick(), s[1].first_tick()), (2, 5));
-        assert_eq!(s[2].distance(LidarId::Front), Some(mm(320)));
-        assert_eq!(s[2].distance(LidarId::Right), None);
+        assert_eq!(s[2].reading(LidarId::Front), Some((8, mm(320))));
+        assert_eq!(s[2].reading(LidarId::Right), None);
     }
 
     #[test]

@@ -273,7 +273,8 @@ impl Beam {
     /// are less than `margin` (at most [`CORNER_MARGIN_MAX`]) apart in
     /// range. Division-free:
     /// `|A_x n_y - A_y n_x| < margin n_x n_y` with the cone cosines `n`.
-    // tick bar (see Incidence)
+    // tick bar: on a lidar correction's corner path, inlined with its two
+    // helpers below (`bar::tick_without_io_4_hypotheses`, lx106/BENCHMARKS.md)
     #[inline(always)]
     pub fn near_corner(&self, margin: Length) -> bool {
         self.corner_apart().is_some_and(|(apart, cs)| within(apart, cs, margin))
@@ -282,7 +283,7 @@ impl Beam {
     /// The two candidate walls' distance apart times `cs`, Q14 mm (below
     /// 2^29), and `cs`, their cone cosines' product `n_a n_b` in Q30; `None`
     /// when the cone meets one wall.
-    // tick bar (see Incidence)
+    // tick bar (see `near_corner`)
     #[inline(always)]
     fn corner_apart(&self) -> Option<(i32, i32)> {
         let Corner::Cross { cross, other_cross, other_normal } = self.corner else {
@@ -301,7 +302,7 @@ impl Beam {
 /// The walls `apart` (times `cs`, Q14 mm; [`Beam::corner_apart`]) are
 /// less than `margin` (at most [`CORNER_MARGIN_MAX`]) apart: the margin
 /// (Q16) times `cs` (Q30) is Q14.
-// tick bar (see Incidence)
+// tick bar (see `Beam::near_corner`)
 #[inline(always)]
 fn within(apart: i32, cs: i32, margin: Length) -> bool {
     apart < mul_hi(margin.0.clamp(0, CORNER_MARGIN_MAX.0), cs)
