@@ -97,6 +97,13 @@ pub const MIN_VIEWS: usize = 4;
 pub const TURN_DEG: i32 = 45;
 /// Its rate, mrad/s: `goto`'s turn rate (`goto::TURN_MRAD_S`).
 pub const TURN_MRAD_S: i32 = super::goto::TURN_MRAD_S;
+/// A turn between views ends when the compass shows its angle
+/// (`control::survey`'s turning.rs), or after this share of the ticks
+/// `TURN_MRAD_S` takes for it, %: then it was blocked, and the
+/// refinement does not use its readings. A floor's slowest turn
+/// direction (issue #29's hard world: 0.6 of the lab's turn line) takes
+/// 167 %.
+pub const TURN_LIMIT_PERCENT: u32 = 200;
 /// Pairs of lidar readings kept from each turn between views, for
 /// refining the search's fix (`model::locate::turns`): a one-step turn
 /// (327 ms at `TURN_MRAD_S`, 32 whole ticks) brings ten, a lidar's
@@ -106,7 +113,7 @@ pub const TURN_MRAD_S: i32 = super::goto::TURN_MRAD_S;
 /// (`model::locate::MAX_VIEWS` views) kept by the survey: 812 B, in the
 /// controller, which lives on the ROM's stack (`firmware::robot::run`'s
 /// frame), not in the image's DRAM budget (`cargo fw-image`: the stack's
-/// worst case 14,096 of 14,272 B).
+/// worst case 14,128 of 14,272 B).
 pub const TURN_SAMPLES: usize = 12;
 /// The body stands this long after a turn before its view is taken,
 /// ms: the servos stop within a tick (data `servo_runs.csv`), and a

@@ -13,7 +13,8 @@
 //!    behind, stands [`config::locate::SETTLE_MS`], and takes the first
 //!    view there (the views are then joined by turns in place only, as the
 //!    search assumes).
-//! 2. A turn in place of [`config::locate::TURN_DEG`], clockwise first, a settle of
+//! 2. A turn in place of [`config::locate::TURN_DEG`], clockwise first, ended
+//!    when the compass shows it ([`turning`]), a settle of
 //!    [`config::locate::SETTLE_MS`], and the next view. When the compass shows that a
 //!    turn moved less than [`config::locate::BLOCKED_TURN_DEG`] (the body against a
 //!    wall), the next turns go the other way. A turn must have room
@@ -53,10 +54,12 @@ use crate::model::measurement::{Arena, LidarId};
 
 mod answer;
 pub mod room;
+mod turning;
 mod view;
 pub use answer::{Action, Failure};
 use room::Ahead;
 pub use room::RoomLog;
+use turning::Turning;
 use view::ViewSums;
 #[cfg(test)]
 mod tests;
@@ -132,6 +135,8 @@ pub struct Survey {
     /// The search's fix is refined with every reading
     /// ([`config::refine::ENABLED`], [`Survey::set_refine`]).
     refine: bool,
+    /// The turn under way, as the compass shows it.
+    turning: Turning,
 }
 
 /// Where the turns have taken the body, in turns of
@@ -199,6 +204,7 @@ impl Survey {
             room: RoomLog { moved_mm: 0, reversed: 0, squeezed: 0, cut_short: false },
             share: 0,
             refine: config::refine::ENABLED,
+            turning: Turning::NONE,
         }
     }
 
@@ -225,6 +231,7 @@ impl Survey {
             room,
             share: _,
             refine: _,
+            turning,
         } = self;
         // (the views past `count` are not read)
         *count = 0;
@@ -236,6 +243,7 @@ impl Survey {
         *positioned = false;
         *sweep = Sweep::START;
         *room = RoomLog::default();
+        *turning = Turning::NONE;
     }
 
     /// The answer when the procedure's time ran out: the fix refined as
@@ -303,6 +311,9 @@ impl Survey {
     /// A compass heading; kept while a view is being taken, up to
     /// [`config::locate::COMPASS_READINGS`].
     pub fn heading(&mut self, h: Angle) {
+        if matches!(self.phase, Phase::Turn) {
+            return self.turning.heading(h);
+        }
         let v = &mut self.view;
         if !matches!(self.phase, Phase::View) || v.headings >= config::locate::COMPASS_READINGS {
             return;
@@ -320,7 +331,7 @@ impl Survey {
             Phase::View => Action::Stand,
             Phase::Drive { ticks, .. } if self.ticks > *ticks => self.enter(Phase::Settle),
             Phase::Drive { forward, .. } => Action::Drive { forward: *forward },
-            Phase::Turn if self.ticks > TURN_TICKS.saturating_mul(u32::from(self.sweep.steps)) => self.turned(),
+            Phase::Turn if self.turning.over(self.ticks) => self.turned(),
             Phase::Turn => Action::Turn { clockwise: self.clockwise },
             Phase::Settle if self.ticks > SETTLE_TICKS => {
                 self.view = ViewSums::default();
@@ -447,16 +458,24 @@ impl Survey {
         // `MAX_VIEWS` (`searched` ends the survey at that many): there is
         // room for it
         let _ = self.turns.push(Turn::new(clockwise, self.sweep.steps));
+        // (a turn starts from a view kept: `from` is its heading)
+        let from = self.views().last().map_or(Angle::ZERO, |v| v.heading);
+        self.turning = Turning::start(from, clockwise, self.sweep.steps);
         self.enter(Phase::Turn)
     }
 
-    /// A turn's ticks are over: its readings are kept, the body settles.
-    /// The tick this is called from turns no more, so the turn ran the
-    /// ticks before it ([`TURN_TICKS`] a step).
+    /// A turn is over: its readings are kept, the body settles. The tick
+    /// this is called from turns no more, so the turn ran the ticks
+    /// before it. A turn out of time before the compass showed its angle
+    /// was blocked for part of its ticks, where the refinement would read
+    /// its readings at headings in proportion to them: they are forgotten.
     fn turned(&mut self) -> Action {
         let ticks = u16::try_from(self.ticks.saturating_sub(1)).unwrap_or(u16::MAX);
         if let Some(turn) = self.turns.last_mut() {
             turn.end(ticks);
+            if !self.turning.reached() {
+                turn.forget();
+            }
         }
         self.enter(Phase::Settle)
     }

@@ -42,11 +42,42 @@ fn run(s: &mut Survey, what: Action) -> (u32, Action) {
     }
 }
 
-/// Past a drive's or a turn's ticks and the settle: standing for a view.
+/// Past a drive's ticks: standing for the settle.
 fn to_next_view(s: &mut Survey, what: Action) -> u32 {
     let (n, a) = run(s, what);
     assert_eq!(a, Action::Stand);
     n
+}
+
+/// The compass's heading after `ticks` ticks of a turn that way from
+/// `from` at `percent` of the turn line's rate ([`config::locate::TURN_DEG`]
+/// in [`TURN_TICKS`]).
+fn turned_to(from: Angle, clockwise: bool, percent: u64, ticks: u16) -> Angle {
+    let step = ((config::locate::TURN_DEG as u64) << 32) / 360;
+    let moved = Angle((step * percent * u64::from(ticks) / 100 / u64::from(TURN_TICKS)) as u32);
+    if clockwise {
+        from.wrapping_add(moved)
+    } else {
+        from.wrapping_sub(moved)
+    }
+}
+
+/// Through a turn under way (the survey entered it on its last tick), the
+/// compass reading before each tick where the body has turned at
+/// `percent` of the turn line's rate from the last view: the ticks it
+/// turned, until it stands.
+fn turn(s: &mut Survey, clockwise: bool, percent: u64) -> u32 {
+    let from = s.views().last().expect("a turn follows a view").heading;
+    let mut tick: u16 = 0;
+    loop {
+        s.heading(turned_to(from, clockwise, percent, tick));
+        match s.tick(&ARENA) {
+            Action::Turn { clockwise: way } => assert_eq!(way, clockwise),
+            Action::Stand => return u32::from(tick),
+            a => panic!("{a:?} while turning"),
+        }
+        tick += 1;
+    }
 }
 
 /// The front reading the drive before the first view aims for: what a
@@ -141,7 +172,7 @@ fn a_wall_an_earlier_view_saw_on_the_left_stops_the_turn_back() {
         for (deg, mm) in [(0, None), (45, Some(500)), (90, Some(500))] {
             assert_eq!(view(&mut s, deg, mm, mm), Action::Stand);
             assert_eq!(run(&mut s, Action::Stand).1, Action::Turn { clockwise: true });
-            to_next_view(&mut s, Action::Turn { clockwise: true });
+            turn(&mut s, true, 100);
             settle(&mut s);
         }
         assert_eq!(view(&mut s, 135, Some(60), Some(right)), Action::Stand);
@@ -219,21 +250,20 @@ fn a_wall_ahead_after_a_turn_turns_back_over_swept_ground_and_past_it() {
     let mut s = Survey::new();
     assert_eq!(view(&mut s, 0, Some(aim()), Some(300)), Action::Stand);
     assert_eq!(run(&mut s, Action::Stand).1, Action::Turn { clockwise: true });
-    let one = to_next_view(&mut s, Action::Turn { clockwise: true }) + 1;
-    assert_eq!(one, TURN_TICKS);
+    assert_eq!(turn(&mut s, true, 100), TURN_TICKS);
     settle(&mut s);
     // the nose now 60 mm from a wall: no turn on into new ground, but back
     // over the swept ground and one step past the first view (whose front
     // showed room), in one turn
     assert_eq!(view(&mut s, 45, Some(60), Some(300)), Action::Stand);
     assert_eq!(run(&mut s, Action::Stand).1, Action::Turn { clockwise: false });
-    assert_eq!(to_next_view(&mut s, Action::Turn { clockwise: false }) + 1, 2 * TURN_TICKS);
+    assert_eq!(turn(&mut s, false, 100), 2 * TURN_TICKS);
     settle(&mut s);
     assert_eq!(s.room(), RoomLog { moved_mm: 0, reversed: 1, squeezed: 0, cut_short: false });
     // on counterclockwise one step at a time, while there is room ahead
     assert_eq!(view(&mut s, 315, Some(aim()), Some(300)), Action::Stand);
     assert_eq!(run(&mut s, Action::Stand).1, Action::Turn { clockwise: false });
-    assert_eq!(to_next_view(&mut s, Action::Turn { clockwise: false }) + 1, TURN_TICKS);
+    assert_eq!(turn(&mut s, false, 100), TURN_TICKS);
 }
 
 #[test]
@@ -274,17 +304,20 @@ fn the_room_check_is_what_turns_away_from_the_wall() {
 // ---- the readings taken while turning (issue #29) ----------------------
 
 /// Through a turn under way (the survey entered it on its last tick), as
-/// the loop hands the readings in, before each tick: the right lidar's on
-/// the turn's ticks 0, 3, 6, ... (400 mm and the tick) and the front's on
-/// 2, 5, 8, ... (200 mm and the tick), a lidar's period being 3.3 ticks.
-/// Ticks until the survey stands; returns the ticks it turned and the
-/// turn as it should be kept: the same readings handed to a [`Turn`] of
-/// `steps` directly, ended after those ticks.
-fn turn_reading(s: &mut Survey, clockwise: bool, steps: u8) -> (u32, Turn) {
+/// the loop hands the readings in, before each tick: the compass where
+/// the body has turned at `percent` of the turn line's rate ([`turn`]),
+/// the right lidar's on the turn's ticks 0, 3, 6, ... (400 mm and the
+/// tick) and the front's on 2, 5, 8, ... (200 mm and the tick), a lidar's
+/// period being 3.3 ticks. Ticks until the survey stands; returns the
+/// ticks it turned and the turn as it should be kept: the same readings
+/// handed to a [`Turn`] of `steps` directly, ended after those ticks.
+fn turn_reading(s: &mut Survey, clockwise: bool, steps: u8, percent: u64) -> (u32, Turn) {
     let mut kept = Turn::new(clockwise, steps);
+    let from = s.views().last().expect("a turn follows a view").heading;
     // the ticks the turn has run: 0 before its first
     let mut tick: u16 = 0;
     loop {
+        s.heading(turned_to(from, clockwise, percent, tick));
         for (due, id, mm) in [(tick % 3 == 0, LidarId::Right, 400), (tick % 3 == 2, LidarId::Front, 200)] {
             if due {
                 let d = Length::from_mm(mm + i32::from(tick));
@@ -348,7 +381,7 @@ fn the_turns_between_views_keep_the_readings_taken_on_them() {
     // view 0, then a turn clockwise
     assert_eq!(view(&mut s, 0, Some(aim()), Some(300)), Action::Stand);
     assert!(s.turns().is_empty());
-    let (ticks, first) = turn_reading(&mut s, true, 1);
+    let (ticks, first) = turn_reading(&mut s, true, 1, 100);
     // the tick that began the turn stood (it took the view), the turn's
     // TURN_TICKS ticks turned, and the tick after them stood again and
     // ended it: the turn ran the ticks that turned, TURN_TICKS (45 degrees
@@ -360,11 +393,11 @@ fn the_turns_between_views_keep_the_readings_taken_on_them() {
     // it, two steps in one turn
     assert_eq!(view(&mut s, 45, Some(60), Some(300)), Action::Stand);
     assert_eq!(s.turns(), core::slice::from_ref(&first));
-    let (ticks, second) = turn_reading(&mut s, false, 2);
+    let (ticks, second) = turn_reading(&mut s, false, 2, 100);
     assert_eq!(ticks, 2 * TURN_TICKS);
     settle_reading(&mut s);
     assert_eq!(view(&mut s, 315, Some(aim()), Some(300)), Action::Stand);
-    let (ticks, third) = turn_reading(&mut s, false, 1);
+    let (ticks, third) = turn_reading(&mut s, false, 1, 100);
     assert_eq!(ticks, TURN_TICKS);
     settle_reading(&mut s);
     assert_eq!(view(&mut s, 270, Some(aim()), Some(300)), Action::Stand);
@@ -415,27 +448,79 @@ fn a_survey_of_all_its_views_keeps_a_turn_between_each_two() {
     }
 }
 
+/// A turn's ticks at `percent` of the turn line's rate: the first tick
+/// past its `steps` of [`config::locate::TURN_DEG`] on the compass.
+fn ticks_at(steps: u32, percent: u32) -> u32 {
+    (steps * TURN_TICKS * 100).div_ceil(percent)
+}
+
 #[test]
-fn a_blocked_turn_is_kept_and_a_survey_cut_short_keeps_its_turns() {
+fn a_turn_ends_when_the_compass_shows_its_angle() {
+    // issue #29's hard world turns each way at 0.6 to 1.8 times the line
+    for (percent, ticks) in [(100, 32), (180, 18), (60, 54)] {
+        assert_eq!(ticks_at(1, percent), ticks);
+        let mut s = Survey::new();
+        assert_eq!(view(&mut s, 0, Some(aim()), Some(300)), Action::Stand);
+        assert_eq!(turn_reading(&mut s, true, 1, u64::from(percent)).0, ticks, "{percent} %");
+        settle_reading(&mut s);
+        assert_eq!(view(&mut s, 45, Some(aim()), Some(300)), Action::Stand);
+        let kept = &s.turns()[0];
+        assert_eq!(kept.ticks, ticks as u16);
+        // readings every 3 ticks, up to the turn's twelve
+        assert_eq!(kept.samples().len(), (ticks as usize / 3 + 1).min(12), "{percent} %");
+    }
+    // a reversed turn goes back over the swept ground by the compass too
     let mut s = Survey::new();
     assert_eq!(view(&mut s, 0, Some(aim()), Some(300)), Action::Stand);
-    let (_, turn) = turn_reading(&mut s, true, 1);
+    assert_eq!(turn_reading(&mut s, true, 1, 60).0, ticks_at(1, 60));
     settle_reading(&mut s);
-    // the compass shows no turn (blocked), and the nose 20 mm from a wall:
-    // no room either way, the survey ends with the views it has
+    assert_eq!(view(&mut s, 45, Some(60), Some(300)), Action::Stand);
+    assert_eq!(turn_reading(&mut s, false, 2, 180).0, ticks_at(2, 180));
+}
+
+#[test]
+fn a_blocked_turn_is_kept_without_its_readings_and_a_survey_cut_short_keeps_its_turns() {
+    let mut s = Survey::new();
+    assert_eq!(view(&mut s, 0, Some(aim()), Some(300)), Action::Stand);
+    // the compass shows no turn (blocked): the turn ends when a step's
+    // ticks on the turn line showed less than BLOCKED_TURN_DEG
+    let (ticks, mut turn) = turn_reading(&mut s, true, 1, 0);
+    assert_eq!(ticks, TURN_TICKS - 1);
+    settle_reading(&mut s);
+    // and the nose 20 mm from a wall: no room either way, the survey ends
+    // with the views it has
     assert_eq!(view(&mut s, 0, Some(20), Some(100)), Action::Stand);
     assert!(s.room().cut_short);
     assert!(matches!(run(&mut s, Action::Stand).1, Action::Done(_)));
     assert_eq!(s.views().len(), 2);
+    // the turn is kept, its readings forgotten (the refinement would read
+    // them at headings the body never turned to)
+    assert!(!turn.samples().is_empty());
+    turn.forget();
     assert_eq!(s.turns(), [turn]);
-    assert_eq!((s.turns()[0].clockwise, s.turns()[0].ticks), (true, TURN_TICKS as u16));
+    assert_eq!((s.turns()[0].clockwise, s.turns()[0].ticks), (true, TURN_TICKS as u16 - 1));
+}
+
+#[test]
+fn a_turn_too_slow_for_its_limit_ends_there_without_its_readings() {
+    let limit = TURN_TICKS * config::locate::TURN_LIMIT_PERCENT / 100;
+    assert_eq!(limit, 64);
+    for (percent, ticks, kept) in [(72, 45, true), (48, limit, false)] {
+        let mut s = Survey::new();
+        assert_eq!(view(&mut s, 0, Some(aim()), Some(300)), Action::Stand);
+        // (at 48 %, 21 degrees a step's ticks: not stalled)
+        assert_eq!(turn_reading(&mut s, true, 1, percent).0, ticks, "{percent} %");
+        settle_reading(&mut s);
+        assert_eq!(view(&mut s, 45, Some(aim()), Some(300)), Action::Stand);
+        assert_eq!(!s.turns()[0].samples().is_empty(), kept, "{percent} %");
+    }
 }
 
 #[test]
 fn a_turn_whose_view_fails_is_not_among_the_turns() {
     let mut s = Survey::new();
     assert_eq!(view(&mut s, 0, Some(aim()), Some(300)), Action::Stand);
-    turn_reading(&mut s, true, 1);
+    turn_reading(&mut s, true, 1, 100);
     settle_reading(&mut s);
     // the view after it: the lidars read, the compass gives nothing
     let mut end = Action::Stand;
@@ -451,10 +536,10 @@ fn a_turn_whose_view_fails_is_not_among_the_turns() {
 /// the views, the turns and the room log after them.
 fn three_views(s: &mut Survey) -> (std::vec::Vec<Readings>, std::vec::Vec<Turn>, RoomLog) {
     assert_eq!(view(s, 0, Some(aim()), Some(300)), Action::Stand);
-    turn_reading(s, true, 1);
+    turn_reading(s, true, 1, 100);
     settle_reading(s);
     assert_eq!(view(s, 45, Some(60), Some(300)), Action::Stand);
-    turn_reading(s, false, 2);
+    turn_reading(s, false, 2, 100);
     settle_reading(s);
     assert_eq!(view(s, 315, Some(aim()), Some(300)), Action::Stand);
     (s.views().to_vec(), s.turns().to_vec(), s.room())

@@ -101,6 +101,12 @@ impl Turn {
         }
     }
 
+    /// The turn's readings say nothing: forgotten.
+    pub fn forget(&mut self) {
+        self.samples.clear();
+        self.pending = None;
+    }
+
     fn close(&mut self, pair: TurnSample) {
         if self.seen % u16::from(self.stride.max(1)) == 0 {
             // a full turn keeps its first readings
