@@ -14,7 +14,7 @@
 //!    view there (the views are then joined by turns in place only, as the
 //!    search assumes).
 //! 2. A turn in place of [`config::locate::TURN_DEG`], clockwise first, ended
-//!    when the compass shows it ([`turning`]), a settle of
+//!    when the compass shows it (`survey/turning.rs`), a settle of
 //!    [`config::locate::SETTLE_MS`], and the next view. When the compass shows that a
 //!    turn moved less than [`config::locate::BLOCKED_TURN_DEG`] (the body against a
 //!    wall), the next turns go the other way. A turn must have room
