@@ -34,6 +34,15 @@ pub const CONE_DEG: f64 = 25.0;
 /// Measurement timing budget, us (VL53L0X default 33 ms; at most one
 /// reading per 33 ms per lidar).
 pub const TIMING_BUDGET_US: u32 = 33_000;
+/// A reading describes the body this long before the loop tick it is
+/// read at, us: the chip measures over its whole timing budget (ST's
+/// datasheet, continuous back-to-back ranging; UM2039: the budget is
+/// one measurement's time), so its middle is half a budget before the
+/// result is ready, and the loop polls for it once a tick (half a tick's
+/// wait on average). Turning at the survey's 2.4 rad/s, the body turns
+/// 3 degrees in that time; the refinement reads a turn's readings there
+/// (`model::locate::refine`).
+pub const READING_AGE_US: u32 = TIMING_BUDGET_US / 2 + 1_000_000 / super::timing::LOOP_HZ / 2;
 /// Wait after releasing XSHUT before talking to the chip, us (datasheet
 /// boot time 1.2 ms, with margin).
 pub const BOOT_TIME_US: u32 = 2_000;

@@ -113,7 +113,7 @@ pub const TURN_LIMIT_PERCENT: u32 = 200;
 /// (`model::locate::MAX_VIEWS` views) kept by the survey: 812 B, in the
 /// controller, which lives on the ROM's stack (`firmware::robot::run`'s
 /// frame), not in the image's DRAM budget (`cargo fw-image`: the stack's
-/// worst case 14,128 of 14,272 B).
+/// worst case 14,192 of 14,272 B).
 pub const TURN_SAMPLES: usize = 12;
 /// The body stands this long after a turn before its view is taken,
 /// ms: the servos stop within a tick (data `servo_runs.csv`), and a

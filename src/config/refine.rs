@@ -52,7 +52,7 @@ pub const VIEW_MIX: (f64, f64, f64) = (0.7, estimator::COMPASS_SIGMA_DEG, 12.0);
 /// readings' spread grows with range (at 45-60 degrees 30, 49 and 95 mm,
 /// robust spread, below 250 mm, to 450 and beyond); 1,000 hard power-ups
 /// (before each turn reading kept its own tick, `model::locate::turns`;
-/// 924 now): 893 right, 887 with the fixed 15 mm.
+/// 939 now): 893 right, 887 with the fixed 15 mm.
 pub const INCIDENCE_SPREAD: f64 = 0.05;
 /// A reading whose range is read farther than this from square on (the
 /// beam's axis, or the cone's nearest point, as the fit's start reads
@@ -124,6 +124,6 @@ pub const MAX_TRIES: u8 = 6;
 /// `Beam` and its noise, about 5,000 lx106 instructions with its
 /// derivatives, so 32 take about a fifth of the 10 ms tick, and a pass's
 /// end (the step's solve) a little more: under the search's third
-/// (`lx106/BENCHMARKS.md`, "Refining the fix": 209,176 at worst, 26.1 %;
+/// (`lx106/BENCHMARKS.md`, "Refining the fix": 212,290 at worst, 26.5 %;
 /// with every start tried 233,459, 29.1 %).
 pub const ROWS_PER_STEP: usize = 32;

@@ -122,6 +122,20 @@ impl Pose {
         let t = self.trig();
         (t.sin, t.cos)
     }
+    /// `(sin theta, cos theta)` in Q2.30 as the cache holds them: current
+    /// after [`Pose::sin_cos`].
+    #[inline(always)]
+    pub fn cached_sin_cos(&self) -> (i32, i32) {
+        (self.trig.sin, self.trig.cos)
+    }
+    /// `(lever sin theta, lever cos theta)` in Q21 mm for the lever the
+    /// sine and cosine cache holds: how the reference point moves per
+    /// radian turned about it. Current after [`Pose::sin_cos`]; a turn's
+    /// step leaves the cache for its lever (the pivot's).
+    #[inline(always)]
+    pub fn cached_swing(&self) -> (i32, i32) {
+        (self.trig.d_sin, self.trig.d_cos)
+    }
     /// The cache for the lever it holds.
     // tick bar: the cache's check inlined into the beam and the step
     #[inline(always)]

@@ -12,9 +12,19 @@
 //! result (0x1E, big-endian mm). The truth comes from outside:
 //! [`FakeVl53l0x::set_distance_mm`] (what the chip reports, 8190 = no
 //! target).
+//!
+//! A continuous result is measured over its whole period, not at the
+//! instant it is ready: ST's datasheet (DocID029104, "Ranging modes":
+//! back-to-back ranging starts the next measurement as soon as one
+//! ends) and its API manual (UM2039: the timing budget is the time one
+//! range measurement takes, 33 ms by default). So a result reports the
+//! distance set nearest the middle of its measurement, half a period
+//! before it is due (`FakeVl53l0x::distance_at`): a sensor on a turning
+//! body reads where it pointed about 17 ms earlier, 2.3 degrees at the
+//! survey's turn rate. Single-shot starts report at once.
 
 use std::cell::RefCell;
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, VecDeque};
 use std::rc::Rc;
 
 use embedded_hal::digital::{ErrorType, OutputPin};
@@ -55,6 +65,10 @@ pub struct FakeVl53l0x {
     paged: BTreeMap<(u8, u8), u8>,
     ptr: u8,
     distance_mm: u16,
+    /// The distances set over the last few periods, oldest first, and
+    /// when (ns): a continuous result reports the one set nearest the
+    /// middle of its measurement.
+    history: VecDeque<(u64, u16)>,
     mode: Mode,
     period_ns: u64,
     next_result_ns: u64,
@@ -83,6 +97,7 @@ impl FakeVl53l0x {
             paged: BTreeMap::new(),
             ptr: 0,
             distance_mm: 8190,
+            history: VecDeque::new(),
             mode: Mode::Idle,
             period_ns: DEFAULT_PERIOD_NS,
             next_result_ns: 0,
@@ -134,14 +149,35 @@ impl FakeVl53l0x {
 
     /// What the chip measures from now on, mm (8190: no target).
     pub fn set_distance_mm(&mut self, mm: u16) {
+        let now = self.clock.now_ns();
+        // what was set more than two periods ago no measurement reads
+        let keep_from = now.saturating_sub(2 * self.period_ns);
+        while self.history.len() > 1 && self.history.get(1).is_some_and(|&(t, _)| t <= keep_from) {
+            self.history.pop_front();
+        }
+        if self.history.is_empty() {
+            // the distance before: in effect since the start
+            self.history.push_back((0, self.distance_mm));
+        }
+        match self.history.back_mut() {
+            // set again at the same instant (a hand over the wall): the
+            // last one set is what the chip sees
+            Some((t, set)) if *t == now => *set = mm,
+            _ => self.history.push_back((now, mm)),
+        }
         self.distance_mm = mm;
+    }
+
+    /// The distance set nearest the time `t_ns` (see the module docs).
+    fn distance_at(&self, t_ns: u64) -> u16 {
+        self.history.iter().min_by_key(|&&(t, _)| t.abs_diff(t_ns)).map_or(self.distance_mm, |&(_, mm)| mm)
     }
     pub fn distance_mm(&self) -> u16 {
         self.distance_mm
     }
     /// Nothing in range (the chip reports 8190).
     pub fn set_no_target(&mut self) {
-        self.distance_mm = 8190;
+        self.set_distance_mm(8190);
     }
     /// The measurement period in continuous mode, ns.
     pub fn set_period_ns(&mut self, ns: u64) {
@@ -200,15 +236,18 @@ impl FakeVl53l0x {
         }
         let now = self.clock.now_ns();
         if now >= self.next_result_ns {
-            self.latch();
-            // Next result one period after the last one due (catch up).
+            // the newest result due, measured over the period before it
             let behind = (now - self.next_result_ns) / self.period_ns;
-            self.next_result_ns += (behind + 1) * self.period_ns;
+            let due = self.next_result_ns + behind * self.period_ns;
+            let mm = self.distance_at(due.saturating_sub(self.period_ns / 2));
+            self.latch(mm);
+            // Next result one period after the last one due (catch up).
+            self.next_result_ns = due + self.period_ns;
         }
     }
 
-    fn latch(&mut self) {
-        let [hi, lo] = self.distance_mm.to_be_bytes();
+    fn latch(&mut self, mm: u16) {
+        let [hi, lo] = mm.to_be_bytes();
         self.page0[0x14] = 0x0B; // RESULT_RANGE_STATUS: range valid
         self.page0[0x1E] = hi;
         self.page0[0x1F] = lo;
@@ -264,7 +303,7 @@ impl FakeVl53l0x {
                 if v & 0x01 != 0 {
                     // single shot or reference calibration: done at once
                     self.mode = Mode::Idle;
-                    self.latch();
+                    self.latch(self.distance_mm);
                 } else if v & 0x06 != 0 {
                     self.mode = Mode::Continuous;
                     self.next_result_ns = self.clock.now_ns() + self.period_ns;

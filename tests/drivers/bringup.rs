@@ -71,6 +71,39 @@ fn readings_go_through_the_lidar_models() {
     }
 }
 
+/// The chip ranges over its whole period, back to back (ST's datasheet
+/// DocID029104, "Ranging modes"; UM2039: the timing budget is one
+/// measurement's time): a result reports the distance set nearest the
+/// middle of its measurement (`sim::vl53l0x`), not the one in effect when
+/// it is ready, which a chip that latched at that instant would report
+/// (the negative check: 700 below).
+#[test]
+fn a_reading_is_of_the_middle_of_its_measurement() {
+    use paperbot::sim::vl53l0x::DEFAULT_PERIOD_NS;
+    let sim = SimSensors::new();
+    let (mut front, mut right, _) = sim.drivers();
+    assert!(bring_up(&mut front, &mut right).all_ok());
+    // a result comes: it was due within the last ms
+    sim.front.borrow_mut().set_distance_mm(300);
+    while front.poll() == Err(nb::Error::WouldBlock) {
+        sim.clock.advance_ms(1);
+    }
+    // over the next measurement (due a period later, its middle half a
+    // period before that, 15.5 to 16.5 ms from here): 300 until 5 ms,
+    // 480 from 15 ms (500 set first at that instant, then a hand over it:
+    // the last set counts), 700 from 28 ms
+    let period_ms = DEFAULT_PERIOD_NS / 1_000_000;
+    let mut elapsed_ms = 0;
+    for (at_ms, mm) in [(5, 300), (15, 500), (15, 480), (28, 700)] {
+        sim.clock.advance_ms(at_ms - elapsed_ms);
+        elapsed_ms = at_ms;
+        sim.front.borrow_mut().set_distance_mm(mm);
+    }
+    sim.clock.advance_ms(period_ms + 1 - elapsed_ms);
+    assert_eq!(front.poll().unwrap().raw_mm, 480);
+    assert_eq!(sim.front.borrow().distance_mm(), 700, "in effect when the result came");
+}
+
 /// Heading the model should give for a car heading `h` (degrees, clockwise
 /// from true north), f64 reference: magnetic heading `h - declination`, the
 /// horizontal field seen from the car is (cos m, -sin m) in (forward,

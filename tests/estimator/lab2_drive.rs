@@ -231,7 +231,14 @@ fn replay_says_how_the_estimate_agrees_with_its_readings() {
         early_good.mean_normalised(),
         early_lost.mean_normalised()
     );
-    assert!(early_lost.mean_normalised() > 2.0 * early_good.mean_normalised());
+    // the right lidar says it: the located estimate explains it (a mean
+    // normalised innovation near 4), the wrong one does not; drive1's
+    // front fits poorly even located (about 22, open: the real drive's
+    // front readings are not all of the box's walls), so the two lidars'
+    // mean says it less (38.3 against 14.0 before a reading's age was
+    // modelled, 20.9 against 14.1 since: the wrong start's path changed)
+    assert!(early_lost.right.mean_normalised > 2.0 * early_good.right.mean_normalised);
+    assert!(early_lost.mean_normalised() > early_good.mean_normalised());
     // ... and its readings bring it back: it ends where the located one does
     let end = apart(good_est.last().unwrap(), est.last().unwrap());
     println!("the wrong start ends {end:.1} mm from the located one");

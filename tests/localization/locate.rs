@@ -329,7 +329,7 @@ fn procedure_refined(
                     }
                 }
             }
-            let mut samples = TurnSamples::default();
+            let mut samples = TurnSamples::from(&truth);
             let read = refined.is_some().then_some((&mut samples, &mut turns_rng));
             truth = turn_read(&w, &truth, degrees, &mut rng, read);
             turns.push(samples);

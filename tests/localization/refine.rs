@@ -34,25 +34,48 @@ use std::sync::atomic::{AtomicU64, Ordering};
 /// The lidars' readings during one turn between views.
 #[derive(Default, Clone, Debug)]
 pub(crate) struct TurnSamples {
-    /// (share of the turn's ticks done, front, right): model distances
+    /// (the turn's ticks done when it came, front, right): model distances
     /// from the reference point, mm.
-    samples: Vec<(f64, Option<f64>, Option<f64>)>,
-    ticks_done: u32,
+    samples: Vec<(u32, Option<f64>, Option<f64>)>,
+    /// The body's poses so far, from the turn's start: a reading is of
+    /// the pose [`AGE_TICKS`] before it comes.
+    poses: Vec<PoseF64>,
     /// The turn's ticks and its way.
     ticks: u32,
     clockwise: bool,
 }
 
+/// How long before the tick it comes at a reading describes the body,
+/// ticks (`config::lidar::READING_AGE_US`: the chip measures over its
+/// timing budget, the loop polls once a tick) ...
+const AGE_TICKS: f64 = config::lidar::READING_AGE_US as f64 * config::timing::LOOP_HZ as f64 / 1e6;
+/// ... and the tick the realistic simulator's chip reads the body at
+/// (`sim::vl53l0x`: the distance set nearest the middle of its
+/// measurement, mostly two ticks back).
+const AGE_WHOLE_TICKS: usize = 2;
+
 impl TurnSamples {
+    /// A turn from `start` about to begin.
+    pub(crate) fn from(start: &PoseF64) -> TurnSamples {
+        TurnSamples { poses: vec![*start], ..TurnSamples::default() }
+    }
+
     /// After one of a turn's `ticks` ticks at `p`: a reading of each lidar
-    /// every third tick (the lidars' 33 ms period).
+    /// every third tick (the lidars' 33 ms period), of the body two ticks
+    /// before.
     pub(crate) fn tick(&mut self, w: &World, p: &PoseF64, ticks: u32, clockwise: bool, rng: &mut Rng) {
-        self.ticks_done += 1;
+        self.poses.push(*p);
         (self.ticks, self.clockwise) = (ticks, clockwise);
-        if self.ticks_done % 3 == 0 {
-            let done = f64::from(self.ticks_done) / f64::from(ticks.max(1));
-            self.samples.push((done, reading(w, p, LidarId::Front, rng), reading(w, p, LidarId::Right, rng)));
+        let done = self.poses.len() as u32 - 1;
+        if done % 3 == 0 {
+            let read = self.poses[self.poses.len().saturating_sub(1 + AGE_WHOLE_TICKS)];
+            self.samples.push((done, reading(w, &read, LidarId::Front, rng), reading(w, &read, LidarId::Right, rng)));
         }
+    }
+
+    /// A reading's share of the turn done when it was measured.
+    fn share(&self, done: u32) -> f64 {
+        ((f64::from(done) - AGE_TICKS) / f64::from(self.ticks.max(1))).clamp(0.0, 1.0)
     }
 }
 
@@ -63,8 +86,8 @@ impl TurnSamples {
     pub(crate) fn to_turn(&self) -> Turn {
         let steps = self.samples.len().div_ceil(SAMPLES).max(1) as u8;
         let mut turn = Turn::new(self.clockwise, steps);
-        for &(done, front, right) in &self.samples {
-            let tick = (done * f64::from(self.ticks)).round() as u16;
+        for &(tick, front, right) in &self.samples {
+            let tick = tick as u16;
             for (id, d) in [(LidarId::Front, front), (LidarId::Right, right)] {
                 if let Some(d) = d {
                     turn.push(id, tick, Length::from_mm_f64(d.round()));
@@ -294,7 +317,7 @@ impl Problem<'_> {
             let rate = if t.clockwise { p[P_CW] } else { -p[P_CCW] };
             out.push(((to - from - rate * f64::from(t.ticks)).to_degrees() / TURN_SIGMA_DEG, true));
             for &(done, front, right) in &t.samples {
-                lidars(from + done * (to - from), front, right, out);
+                lidars(from + t.share(done) * (to - from), front, right, out);
             }
         }
         out.push((mixture(b.to_degrees(), BIAS_MIX), false));

@@ -114,6 +114,7 @@ pub mod replay;
 
 mod constants;
 mod covariance;
+mod lag;
 mod light;
 mod outcome;
 mod pivot;
@@ -214,6 +215,9 @@ pub struct Estimator {
     evidence: EvidenceSet,
     /// Where turns in place pivot, learned (`pivot`).
     pivot: pivot::Pivot,
+    /// The body's move over a lidar reading's age at the last step's
+    /// motion (`lag`).
+    lag: lag::Lag,
     /// Where in the lidars' spot their ranges come from, learned (`spot`).
     spot: spot::Spot,
     arena: Arena,
@@ -261,6 +265,7 @@ impl Estimator {
             clock_us: 0,
             evidence: EvidenceSet::FRESH,
             pivot: pivot::Pivot::START,
+            lag: lag::Lag::NONE,
             spot: spot::Spot::START,
             arena,
             bounds,
@@ -301,7 +306,8 @@ impl Estimator {
     }
 
     /// Corrects with a lidar's model output (distance from the reference
-    /// point along the beam, see [`crate::model::lidar`]).
+    /// point along the beam, see [`crate::model::lidar`]), of the body a
+    /// reading's age ago (`lag`).
     pub fn update_lidar(&mut self, which: LidarId, distance: Length) -> Update {
         let u = self.lidar_all(which, distance);
         self.stats_of(Sensor::of(which)).count(u);

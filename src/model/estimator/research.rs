@@ -26,19 +26,19 @@ impl Estimator {
     #[inline(never)]
     pub(super) fn research_lidar(&mut self, which: LidarId, distance: Length) {
         let d = Disagreement { which, distance };
-        let (arena, bounds, share) = (self.arena, self.bounds, self.spot.share);
+        let (arena, bounds, share, lag) = (self.arena, self.bounds, self.spot.share, self.lag);
         let mut h = *self.best_filter();
         for axis in [X, Y] {
             h.p.set(axis, axis, h.p.get(axis, axis).max(P_RESEARCH));
             h.p.decouple(axis);
         }
-        let Some(r) = h.lidar_reading(&arena, d.which, d.distance, share) else { return };
+        let Some(r) = h.lidar_reading(&arena, d.which, d.distance, share, &lag) else { return };
         if h.correct(r.row, r.nu, r.r, &bounds).0.update != Update::Accepted {
             let step = Coord::from_length(Length(if r.toward_high { r.nu } else { r.nu.saturating_neg() }));
             let c = if r.axis == X { &mut h.pose.x } else { &mut h.pose.y };
             *c = Coord(c.0.saturating_add(step.0));
             h.keep_in(&bounds);
-            if let Some(r) = h.lidar_reading(&arena, d.which, d.distance, share) {
+            if let Some(r) = h.lidar_reading(&arena, d.which, d.distance, share, &lag) {
                 h.correct(r.row, r.nu, r.r, &bounds);
             }
         }

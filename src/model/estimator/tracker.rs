@@ -58,6 +58,7 @@ impl Estimator {
         let located = self.tracking == Tracking::Located;
         self.pivot.step(turning, theta, leader, self.clock_us, located);
         let pivot = self.pivot.turning;
+        self.lag.follow(scaled);
         let shared =
             if self.live > 1 { Some(Shared::of(self.best_filter(), motion, scaled, dt, &pivot)) } else { None };
         for (i, (h, _)) in self.live_mut().enumerate() {
@@ -123,13 +124,13 @@ impl Estimator {
     /// [`Estimator::weigh`]).
     pub(super) fn lidar_all(&mut self, which: LidarId, distance: Length) -> Update {
         let counted = self.counts(Sensor::of(which));
-        let (arena, bounds, best, other) = (self.arena, self.bounds, self.best, self.next_secondary());
+        let (arena, bounds, best, other, lag) = (self.arena, self.bounds, self.best, self.next_secondary(), self.lag);
         let share = self.spot.share;
         let mut moved = (0i64, 0i64);
         let mut spot = None;
         let mut through = |i: usize| -> Option<(Outcome, bool)> {
             let h = self.hyps.get_mut(i)?;
-            let Some(r) = h.lidar_reading(&arena, which, distance, share) else {
+            let Some(r) = h.lidar_reading(&arena, which, distance, share, &lag) else {
                 return Some((Outcome::UNUSABLE, false));
             };
             let (outcome, repairs) = if i == best {

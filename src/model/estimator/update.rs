@@ -6,6 +6,7 @@ use super::constants::{
     R_COMPASS, R_INCIDENCE, R_LIDAR, SCALE_MAX, SCALE_MIN, TILDE_Q16_PER_LSB,
 };
 use super::covariance::{each, Covariance, BIAS, CCW, CW, N, SPEED, T, X, Y};
+use super::lag::Lag;
 use super::predict::{Bounds, Filter};
 use super::Update;
 use crate::config::estimator as cfg;
@@ -80,10 +81,13 @@ impl Filter {
         which: LidarId,
         distance: crate::math::Length,
         share: i32,
+        lag: &Lag,
     ) -> Option<LidarReading> {
         // refresh the pose's sin/cos cache in place (the beam reads it)
         self.pose.sin_cos();
-        let beam = Beam::new(arena, &self.pose, &which.mount());
+        // the body a reading's age ago (`lag`)
+        let then = lag.then(&self.pose);
+        let beam = Beam::at(arena, then.x, then.y, then.theta, then.sin_cos, &which.mount());
         if !beam.square_enough(MIN_NORMAL) {
             return None;
         }
@@ -418,7 +422,7 @@ mod tests {
         let short = Length::from_mm_f64(expected.to_mm_f64() - 25.0);
         let moved = |mut f: Filter, without_corner: bool| {
             let share = 0;
-            let r = f.lidar_reading(&Arena::DEFAULT, LidarId::Front, short, share).unwrap();
+            let r = f.lidar_reading(&Arena::DEFAULT, LidarId::Front, short, share, &Lag::NONE).unwrap();
             let noise = if without_corner { r.r - corner_part(&f, &beam, short) } else { r.r };
             let before = f.pose;
             let (outcome, _) = f.correct(r.row, r.nu, noise, &BOUNDS);

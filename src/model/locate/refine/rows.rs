@@ -127,6 +127,12 @@ const Q30: i64 = 1 << 30;
 /// 1/1000 in Q30: a derivative per rad to one per mrad.
 const PER_MRAD: i64 = Q30 / 1000;
 
+/// How long before its tick a reading describes the body, ticks, Q16
+/// (`config::lidar::READING_AGE_US`): a turn's reading sits that much
+/// earlier in it.
+const READING_AGE: u64 =
+    crate::config::lidar::READING_AGE_US as u64 * crate::config::timing::LOOP_HZ as u64 * (1 << 16) / 1_000_000;
+
 /// The heading step of the axis's numerical derivative (2 mrad, the
 /// reference's), angle LSB, and its inverse in rad.
 const TURN_STEP: i64 = 2 * MRAD;
@@ -268,7 +274,8 @@ impl Model<'_> {
                 for id in [LidarId::Front, LidarId::Right] {
                     if let Some((tick, z)) = s.reading(id) {
                         if slice.take() {
-                            let done = (u64::from(tick).saturating_mul(per_tick) >> 16).min(1 << 16) as i64;
+                            let when = (u64::from(tick) << 16).saturating_sub(READING_AGE);
+                            let done = (when.saturating_mul(per_tick) >> 32).min(1 << 16) as i64;
                             let theta = a.saturating_add(mul_shr(b.saturating_sub(a), done, 16));
                             let at = At { theta, from: (from, (1 << 16) - done), to: (to, done) };
                             f(&self.lidar(p, at, id, z, derivatives));

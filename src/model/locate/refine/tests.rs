@@ -13,6 +13,9 @@ use crate::model::measurement::{expected_lidar, LidarId};
 use std::vec::Vec;
 
 const ARENA: Arena = Arena::DEFAULT;
+/// [`crate::config::lidar::READING_AGE_US`] in loop ticks.
+const AGE_TICKS: f64 =
+    crate::config::lidar::READING_AGE_US as f64 * crate::config::timing::LOOP_HZ as f64 / 1_000_000.0;
 
 /// The body's reference point at heading `deg` about the pivot (mm) at a
 /// lever of `lever` mm.
@@ -30,7 +33,9 @@ fn survey(pivot: (f64, f64), lever: f64, headings: &[f64], bias: f64, spoil: f64
 }
 
 /// [`survey`], each turn's right lidar reading `right_after` ticks after
-/// the front one (the two range on their own clocks).
+/// the front one (the two range on their own clocks). A reading at a tick
+/// is of the body [`crate::config::lidar::READING_AGE_US`] earlier (the
+/// chip's measurement, the loop's poll).
 fn survey_paired(
     pivot: (f64, f64),
     lever: f64,
@@ -57,7 +62,7 @@ fn survey_paired(
             let mut t = Turn::new(w[1] > w[0], 1);
             for tick in (3..30u16).step_by(3) {
                 for (id, tick) in [(LidarId::Front, tick), (LidarId::Right, tick + right_after)] {
-                    let h = w[0] + (w[1] - w[0]) * f64::from(tick) / 33.0;
+                    let h = w[0] + (w[1] - w[0]) * (f64::from(tick) - AGE_TICKS) / 33.0;
                     let p = pose_at(pivot, lever, h);
                     if let Some(d) = read(&p, id) {
                         t.push(id, tick, Length::from_mm_f64(d.to_mm_f64() + spoil));
