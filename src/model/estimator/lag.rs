@@ -74,7 +74,7 @@ impl Lag {
             Motion::Turn(w) => {
                 Move { turn: w.rotation(AGE).0 .0 as i32, rad: w.rotation(AGE_RAD).0 .0 as i32, along: 0 }
             }
-            // under 66 mm/s times 65 ms (Speed::distance_q24): within i32
+            // at most 65.5 mm (`Speed::distance_q24`): within i32
             Motion::Straight(v) => Move { along: v.distance_q24(AGE), ..Move::NONE },
         };
         self.now = Move::mean(step, self.last);
