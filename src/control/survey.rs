@@ -466,9 +466,10 @@ impl Survey {
 
     /// A turn is over: its readings are kept, the body settles. The tick
     /// this is called from turns no more, so the turn ran the ticks
-    /// before it. A turn out of time before the compass showed its angle
-    /// was blocked for part of its ticks, where the refinement would read
-    /// its readings at headings in proportion to them: they are forgotten.
+    /// before it. A turn that ended before the compass showed its angle
+    /// (stalled, or out of time) was blocked for part of its ticks, where
+    /// the refinement would read its readings at headings in proportion
+    /// to them: they are forgotten.
     fn turned(&mut self) -> Action {
         let ticks = u16::try_from(self.ticks.saturating_sub(1)).unwrap_or(u16::MAX);
         if let Some(turn) = self.turns.last_mut() {
