@@ -54,11 +54,13 @@ use crate::model::measurement::{Arena, LidarId};
 
 mod answer;
 pub mod room;
+mod sweep;
 mod turning;
 mod view;
 pub use answer::{Action, Failure};
 use room::Ahead;
 pub use room::RoomLog;
+use sweep::Sweep;
 use turning::Turning;
 use view::ViewSums;
 #[cfg(test)]
@@ -137,29 +139,6 @@ pub struct Survey {
     refine: bool,
     /// The turn under way, as the compass shows it.
     turning: Turning,
-}
-
-/// Where the turns have taken the body, in turns of
-/// [`config::locate::TURN_DEG`] from the first view, clockwise positive;
-/// each pair indexed counterclockwise (0) and clockwise (1).
-#[derive(Clone, Copy, Debug)]
-struct Sweep {
-    at: i8,
-    /// The farthest turned each way: the ground between was swept, and a
-    /// view taken at every turn.
-    edges: [i8; 2],
-    /// The view (its index) taken at each edge.
-    edge_views: [usize; 2],
-    /// A turn that way was blocked (the compass showed it).
-    blocked: [bool; 2],
-    /// Steps of the turn under way: from where it is past the edge that
-    /// way (back over swept ground, then one step onto new).
-    steps: u8,
-}
-
-impl Sweep {
-    /// At the first view, nothing swept.
-    const START: Sweep = Sweep { at: 0, edges: [0, 0], edge_views: [0, 0], blocked: [false, false], steps: 1 };
 }
 
 impl Default for Survey {
@@ -370,26 +349,15 @@ impl Survey {
             }
         }
         let previous = self.views().last().copied();
-        let sw = &mut self.sweep;
-        let way = usize::from(self.clockwise);
         if let Some(previous) = previous {
             if r.heading.diff(previous.heading).saturating_abs() < BLOCKED {
-                if let Some(b) = sw.blocked.get_mut(way) {
-                    *b = true;
-                }
+                self.sweep.blocked(self.clockwise);
                 self.clockwise = !self.clockwise;
             } else {
-                let step = if self.clockwise { sw.steps as i8 } else { (sw.steps as i8).saturating_neg() };
-                sw.at = sw.at.saturating_add(step);
-                let [ccw, cw] = &mut sw.edges;
-                (*ccw, *cw) = ((*ccw).min(sw.at), (*cw).max(sw.at));
+                self.sweep.turned(self.clockwise);
             }
         }
-        for (edge, view) in sw.edges.iter().zip(sw.edge_views.iter_mut()) {
-            if *edge == sw.at {
-                *view = self.count;
-            }
-        }
+        self.sweep.view_taken(self.count);
         if let Some(slot) = self.views.get_mut(self.count) {
             *slot = r;
             self.count = self.count.saturating_add(1);
@@ -424,12 +392,10 @@ impl Survey {
         let sw = self.sweep;
         let views = self.views();
         let room = |clockwise: bool, ahead: Ahead| {
-            let way = usize::from(clockwise);
-            let edge_view = sw.edge_views.get(way).and_then(|&i| views.get(i));
-            sw.blocked.get(way) == Some(&false)
-                && edge_view.is_some_and(|v| {
-                    room::room_to_turn(v, clockwise, ahead) && (clockwise || room::left_clear(views, v.heading))
-                })
+            let edge_view = sw.open_edge_view(clockwise).and_then(|i| views.get(i));
+            edge_view.is_some_and(|v| {
+                room::room_to_turn(v, clockwise, ahead) && (clockwise || room::left_clear(views, v.heading))
+            })
         };
         let few = self.count < config::locate::MIN_VIEWS;
         let way = [(self.clockwise, Ahead::Slanted), (!self.clockwise, Ahead::Slanted)]
@@ -451,16 +417,14 @@ impl Survey {
         if ahead == Ahead::Square {
             self.room.squeezed = self.room.squeezed.saturating_add(1);
         }
-        let [ccw, cw] = sw.edges;
-        let steps = if clockwise { cw.saturating_sub(sw.at) } else { sw.at.saturating_sub(ccw) };
-        self.sweep.steps = steps.saturating_add(1).unsigned_abs();
+        let steps = self.sweep.plan(clockwise);
         // turn `count - 1`, begun only after a view is kept, of fewer than
         // `MAX_VIEWS` (`searched` ends the survey at that many): there is
         // room for it
-        let _ = self.turns.push(Turn::new(clockwise, self.sweep.steps));
+        let _ = self.turns.push(Turn::new(clockwise, steps));
         // (a turn starts from a view kept: `from` is its heading)
         let from = self.views().last().map_or(Angle::ZERO, |v| v.heading);
-        self.turning = Turning::start(from, clockwise, self.sweep.steps);
+        self.turning = Turning::start(from, clockwise, steps);
         self.enter(Phase::Turn)
     }
 
