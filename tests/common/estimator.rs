@@ -224,10 +224,8 @@ pub fn run(sc: &Scenario, mut observe: impl FnMut(f64, &Estimator, PoseF64)) -> 
     let mut pause_until = 0.0;
     let mut next_front_ms = 0u32;
     let mut next_right_ms = lidar_period_ms / 2;
-    // the truth two ticks back: what a lidar reading describes (the chip
-    // measures over its 33 ms budget, the loop polls once a tick:
-    // `config::lidar::READING_AGE_US`, `sim::vl53l0x`)
-    let mut back = [truth; 3];
+    // the truth a lidar reading describes
+    let mut back = super::reading_age::Lagged::new(truth);
     let ticks = (sc.seconds / dt_s).round() as u32;
     for tick in 0..ticks {
         let t_ms = tick * (tick_us / 1000);
@@ -279,7 +277,7 @@ pub fn run(sc: &Scenario, mut observe: impl FnMut(f64, &Estimator, PoseF64)) -> 
             Motion::Turn(w) => (2, 0.0, w.to_rad_s_f64() * seg_factor),
         };
         truth = truth_step(truth, kind, v, w, seg_drift, dt_s);
-        back = [back[1], back[2], truth];
+        back.push(truth);
         res.min_wall_clearance = res.min_wall_clearance.min(truth.x).min(truth.y).min(lx - truth.x).min(wy - truth.y);
         // --- estimator and dead reckoning ---
         est.predict(motion, dt);
@@ -294,7 +292,7 @@ pub fn run(sc: &Scenario, mut observe: impl FnMut(f64, &Estimator, PoseF64)) -> 
                 continue;
             }
             *next = t_ms + lidar_period_ms;
-            let z = true_range(back[0], mount, lx, wy);
+            let z = true_range(back.read(), mount, lx, wy);
             let mut reading = raw_reading(model, z) + sc.lidar_sigma * rng.normal();
             if rng.chance(sc.lidar_outlier_p) {
                 reading = 20.0 + 1100.0 * rng.uniform();

@@ -3,6 +3,7 @@
 
 pub mod estimator;
 pub mod longrun;
+pub mod reading_age;
 pub mod rng;
 
 /// A lab data file from tests/data/lab1/.

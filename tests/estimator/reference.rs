@@ -279,19 +279,18 @@ fn the_fixed_point_filter_follows_the_f64_reference() {
     ];
     let (mut worst_pos, mut worst_deg, mut worst_scale, mut worst_cov, mut n) = (0.0f64, 0.0f64, 0.0f64, 0.0f64, 0);
     let mut k = 0u32;
-    // the truth two ticks back: what a lidar reading describes (the chip
-    // measures over its budget, `sim::vl53l0x`)
-    let mut back = [truth; 3];
+    // the truth a lidar reading describes
+    let mut back = common::reading_age::Lagged::new(truth);
     for &(motion, ticks) in plan.iter().cycle().take(plan.len() * 3) {
         for _ in 0..ticks {
             truth = step(&truth, car(motion), tick);
-            back = [back[1], back[2], truth];
+            back.push(truth);
             est.predict(motion, tick);
             reference.predict(motion, 0.01);
             let mut updates = Vec::new();
             if k % 3 == 0 {
                 for id in [LidarId::Front, LidarId::Right] {
-                    let z = expected_lidar(&paperbot::model::measurement::Arena::DEFAULT, &back[0], id).unwrap();
+                    let z = expected_lidar(&paperbot::model::measurement::Arena::DEFAULT, &back.read(), id).unwrap();
                     let z = z.to_mm_f64() + rng.gauss(1.5);
                     updates.push((est.update_lidar(id, Length::from_mm_f64(z)), reference.lidar(id, z)));
                 }

@@ -47,12 +47,9 @@ pub(crate) struct TurnSamples {
 
 /// How long before the tick it comes at a reading describes the body,
 /// ticks (`config::lidar::READING_AGE_US`: the chip measures over its
-/// timing budget, the loop polls once a tick) ...
+/// timing budget, the loop polls once a tick); the world reads the body
+/// whole ticks back (`common::reading_age::TICKS`).
 const AGE_TICKS: f64 = config::lidar::READING_AGE_US as f64 * config::timing::LOOP_HZ as f64 / 1e6;
-/// ... and the tick the realistic simulator's chip reads the body at
-/// (`sim::vl53l0x`: the distance set nearest the middle of its
-/// measurement, mostly two ticks back).
-const AGE_WHOLE_TICKS: usize = 2;
 
 impl TurnSamples {
     /// A turn from `start` about to begin.
@@ -61,14 +58,14 @@ impl TurnSamples {
     }
 
     /// After one of a turn's `ticks` ticks at `p`: a reading of each lidar
-    /// every third tick (the lidars' 33 ms period), of the body two ticks
-    /// before.
+    /// every third tick (the lidars' 33 ms period), of the body
+    /// `reading_age::TICKS` before.
     pub(crate) fn tick(&mut self, w: &World, p: &PoseF64, ticks: u32, clockwise: bool, rng: &mut Rng) {
         self.poses.push(*p);
         (self.ticks, self.clockwise) = (ticks, clockwise);
         let done = self.poses.len() as u32 - 1;
         if done % 3 == 0 {
-            let read = self.poses[self.poses.len().saturating_sub(1 + AGE_WHOLE_TICKS)];
+            let read = self.poses[self.poses.len().saturating_sub(1 + crate::common::reading_age::TICKS)];
             self.samples.push((done, reading(w, &read, LidarId::Front, rng), reading(w, &read, LidarId::Right, rng)));
         }
     }
