@@ -124,6 +124,7 @@ impl Pose {
     }
     /// `(sin theta, cos theta)` in Q2.30 as the cache holds them: current
     /// after [`Pose::sin_cos`].
+    // tick bar: read in the lidar's row (estimator/lag.rs), as the cache
     #[inline(always)]
     pub fn cached_sin_cos(&self) -> (i32, i32) {
         (self.trig.sin, self.trig.cos)
@@ -132,6 +133,7 @@ impl Pose {
     /// sine and cosine cache holds: how the reference point moves per
     /// radian turned about it. Current after [`Pose::sin_cos`]; a turn's
     /// step leaves the cache for its lever (the pivot's).
+    // tick bar: as `cached_sin_cos`
     #[inline(always)]
     pub fn cached_swing(&self) -> (i32, i32) {
         (self.trig.d_sin, self.trig.d_cos)
