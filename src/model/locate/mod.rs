@@ -84,6 +84,11 @@ const TURNED_TOLERANCE: Length = Length::from_mm_f64(cfg::TOLERANCE_MM + cfg::TU
 const PIVOT_PRIOR: u32 = Length::from_mm_f64(cfg::PIVOT_PRIOR_MM).0 as u32;
 const HEADING_STEP: Angle = Angle::from_degrees_f64(cfg::HEADING_STEP_DEG);
 const _: () = assert!(Length::from_mm_f64(cfg::PIVOT_PRIOR_MM).0 >= 0);
+/// A vouched refinement's places apart fit at least
+/// [`crate::config::refine::RIVAL_GAP`] worse (twice a log-likelihood):
+/// their weights shrink by that likelihood ratio, in whole bits, rounded
+/// down (5: 12 to 1, 3 bits).
+pub const RIVAL_BITS: u32 = (crate::config::refine::RIVAL_GAP / (2.0 * core::f64::consts::LN_2)) as u32;
 
 /// Where the search put the robot.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
@@ -133,8 +138,12 @@ impl Fix {
     }
 
     /// The fix refined to `pose` (`model::locate::refine`): the place
-    /// nearest it moved there, the heading its; uncertain unless the
-    /// refinement `vouched` for it (the search's own flags kept).
+    /// nearest it moved there and made the heaviest, first (the tracker's
+    /// hypotheses start from the places by weight, and the reported pose
+    /// is the heaviest's: the one the line `# located` prints), the heading
+    /// its; uncertain unless the refinement `vouched` for it (the search's
+    /// own flags kept). A vouched fix's other places weigh what its rival
+    /// gap leaves them ([`RIVAL_BITS`]).
     pub fn refine_to(&mut self, pose: Pose, vouched: bool) {
         let count = usize::from(self.count);
         let dist = |c: &Cluster| {
@@ -144,8 +153,20 @@ impl Fix {
             );
             i64::from(dx).saturating_mul(i64::from(dx)).saturating_add(i64::from(dy).saturating_mul(i64::from(dy)))
         };
-        if let Some(nearest) = self.cluster_slots.get_mut(..count).and_then(|c| c.iter_mut().min_by_key(|c| dist(c))) {
-            (nearest.x, nearest.y) = (pose.x, pose.y);
+        if let Some(places) = self.cluster_slots.get_mut(..count) {
+            let heaviest = places.iter().map(|c| c.weight).max().unwrap_or(0);
+            let nearest = places.iter().enumerate().min_by_key(|(_, c)| dist(c)).map_or(0, |(i, _)| i);
+            // (rotated, not swapped: the others keep their order by weight)
+            if let Some(moved) = places.get_mut(..=nearest) {
+                moved.rotate_right(1);
+            }
+            for (i, c) in places.iter_mut().enumerate() {
+                if i == 0 {
+                    (c.x, c.y, c.weight) = (pose.x, pose.y, heaviest);
+                } else if vouched {
+                    c.weight >>= RIVAL_BITS;
+                }
+            }
         }
         self.pose = pose;
         self.untrusted |= !vouched;
