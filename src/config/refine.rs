@@ -94,6 +94,20 @@ pub const FIT_LIMIT: f64 = 2.0;
 pub const RIVAL_GAP: f64 = 5.0;
 pub const RIVAL_MM: i32 = 30;
 pub const RIVAL_DEG: f64 = 5.0;
+/// A refined fit that costs more than [`FIT_LIMIT`] a reading explains
+/// the readings poorly: the search's place is likely wrong (its heading
+/// was the compass's, disturbed), so the search goes on at its next
+/// headings (`config::locate::HEADING_STEP_DEG` apart), up to this many
+/// steps each way, each place found refined, and the cheapest fit is the
+/// answer (`control::survey`). 6: 15 degrees, the hard world's floor
+/// bias (issue #29's 12) and a step; the time limit
+/// (`config::locate::TIME_LIMIT_MS`) still bounds it.
+pub const SEARCH_ON_STEPS: u8 = 6;
+/// ... for at most this long into the procedure, ms: the rest of its time
+/// limit (`config::locate::TIME_LIMIT_MS`) leaves room to find the
+/// cheapest fit again (a search from its heading and a refinement, about
+/// 10 s) and report it.
+pub const SEARCH_ON_MS: u32 = 60_000;
 /// The starts around each place: headings off the compass's, degrees
 /// (nine 4 apart fixed 2 more hard starts of 300 at 1.8 times the cost;
 /// the compass's alone 9 fewer) ...

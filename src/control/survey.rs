@@ -31,6 +31,14 @@
 //!    ambiguous fix says so). A fix of one place the search cannot vouch
 //!    for ([`Fix::untrusted`]: reported uncertain) ends it too: more views
 //!    each bring their own compass error.
+//! 4. The fix refined with every reading ([`crate::model::locate::refine`]).
+//!    A refined fit that explains the readings poorly ([`Refined::poor`])
+//!    rests on a wrong place: the search goes on at its next headings
+//!    ([`config::refine::SEARCH_ON_STEPS`], for at most
+//!    [`config::refine::SEARCH_ON_MS`] into the procedure), each place
+//!    found is refined, and the cheapest fit is reported (found again by
+//!    the search from its heading: the survey keeps its heading try and
+//!    cost, not the fix).
 //!
 //! `tests/localization/locate.rs` measures this survey on the realistic simulator's
 //! sensors (99.1 % right from random starts, the lab's world); `tests/localization/localize.rs` runs it
@@ -47,7 +55,7 @@ use crate::config;
 use crate::config::timing::LOOP_HZ;
 use crate::control::goto::position_steerable;
 use crate::math::{Angle, Length};
-use crate::model::locate::refine::Refine;
+use crate::model::locate::refine::{Refine, Refined};
 use crate::model::locate::turns::Turn;
 use crate::model::locate::{Fix, Readings, Search, MAX_VIEWS};
 use crate::model::measurement::{Arena, LidarId};
@@ -81,12 +89,36 @@ enum Phase {
     Turn,
     Settle,
     Search(Search),
+    /// A search to begin, from its heading try ([`Search::skip_to`]): begun
+    /// by [`Survey::tick`] itself once the tick's work asked for it, not
+    /// under that work's calls (a search is 0.6 kB: `cargo fw-image`'s
+    /// stack check), and its failure to begin answered from there (no
+    /// recursion through [`Survey::searched`]).
+    Begin(u8),
     /// The search's answer, to be refined from the next tick.
     Searched(Fix),
     /// The search's fix refined with every reading
     /// ([`crate::model::locate::refine`]).
     Refine(Refine),
 }
+
+/// The cheapest refined fit so far while the search goes on past fits
+/// that explain the readings poorly ([`config::refine::SEARCH_ON_STEPS`]):
+/// kept as the search's heading try that found it and its cost, not as the
+/// fix (200 bytes more of the robot's stack): reporting it, the search
+/// finds it again from that try (`again`).
+#[derive(Clone, Copy, Debug)]
+struct Cheapest {
+    heading_try: u8,
+    /// Cost a reading, Q24 sigmas squared ([`Refined::per_reading`]).
+    per_reading: i64,
+    again: bool,
+}
+
+/// The last heading try the search goes on to past a poor fit, and the
+/// procedure's ticks it may go on until.
+const LAST_TRY_ON: u8 = config::refine::SEARCH_ON_STEPS.saturating_mul(2);
+const SEARCH_ON_TICKS: u32 = ticks(config::refine::SEARCH_ON_MS);
 
 /// Loop ticks in `ms` (whole ticks, rounded down; const-evaluated).
 const fn ticks(ms: u32) -> u32 {
@@ -139,6 +171,10 @@ pub struct Survey {
     refine: bool,
     /// The turn under way, as the compass shows it.
     turning: Turning,
+    /// The search going on past poor fits: the cheapest so far.
+    cheapest: Option<Cheapest>,
+    /// Ticks since the procedure began.
+    elapsed: u32,
 }
 
 impl Default for Survey {
@@ -184,6 +220,8 @@ impl Survey {
             share: 0,
             refine: config::refine::ENABLED,
             turning: Turning::NONE,
+            cheapest: None,
+            elapsed: 0,
         }
     }
 
@@ -211,6 +249,8 @@ impl Survey {
             share: _,
             refine: _,
             turning,
+            cheapest,
+            elapsed,
         } = self;
         // (the views past `count` are not read)
         *count = 0;
@@ -223,6 +263,8 @@ impl Survey {
         *sweep = Sweep::START;
         *room = RoomLog::default();
         *turning = Turning::NONE;
+        *cheapest = None;
+        *elapsed = 0;
     }
 
     /// The answer when the procedure's time ran out: the fix refined as
@@ -304,7 +346,24 @@ impl Survey {
 
     /// One loop tick: what the body does, or the answer.
     pub fn tick(&mut self, arena: &Arena) -> Action {
+        let action = self.step(arena);
+        // a search asked for begins here, under the tick alone
+        match self.phase {
+            Phase::Begin(heading_try) => self.begin(heading_try),
+            _ => action,
+        }
+    }
+
+    /// The tick's work but a search's beginning.
+    fn step(&mut self, arena: &Arena) -> Action {
         self.ticks = self.ticks.saturating_add(1);
+        self.elapsed = self.elapsed.saturating_add(1);
+        // out of time to search on: the cheapest so far
+        if let (Phase::Search(_), Some(c)) = (&self.phase, self.cheapest) {
+            if !c.again && self.elapsed > SEARCH_ON_TICKS {
+                return self.searched_on(Err(Failure::OutOfTime), c);
+            }
+        }
         match &mut self.phase {
             Phase::View if self.view.complete() || self.ticks > VIEW_TICKS => self.view_taken(),
             Phase::View => Action::Stand,
@@ -317,10 +376,13 @@ impl Survey {
                 self.enter(Phase::View)
             }
             Phase::Settle => Action::Stand,
-            Phase::Search(search) => match search.step(arena, config::locate::SCORES_PER_TICK) {
-                None => Action::Stand,
-                Some(result) => self.searched(result.map_err(Failure::from)),
+            Phase::Search(search) => match (search.step(arena, config::locate::SCORES_PER_TICK), self.cheapest) {
+                (None, _) => Action::Stand,
+                (Some(result), Some(c)) => self.searched_on(result.map_err(Failure::from), c),
+                (Some(result), None) => self.searched(result.map_err(Failure::from)),
             },
+            // (not met: begun by the tick that asked for it)
+            Phase::Begin(_) => Action::Stand,
             Phase::Searched(fix) => {
                 let fix = *fix;
                 self.refine(fix)
@@ -330,7 +392,10 @@ impl Survey {
                 let (views, turns) = (taken(&self.views, self.count), between(&self.turns, self.count));
                 match refine.step(arena, views, turns) {
                     None => Action::Stand,
-                    Some(_) => Action::Done(Ok(refine.refined_fix())),
+                    Some(result) => {
+                        let fix = refine.refined_fix();
+                        self.refined(fix, result)
+                    }
                 }
             }
         }
@@ -368,11 +433,30 @@ impl Survey {
         self.search()
     }
 
-    /// The search of the views so far.
+    /// The search of the views so far ([`Phase::Begin`]).
     fn search(&mut self) -> Action {
-        match Search::new(self.views()) {
-            Ok(search) => self.enter(Phase::Search(search.with_spot_share(self.share))),
-            Err(e) => self.searched(Err(e.into())),
+        self.enter(Phase::Begin(0))
+    }
+
+    /// The search of the views so far going on from its heading try
+    /// `heading_try`, past a poor fit ([`Phase::Begin`]).
+    fn search_on(&mut self, heading_try: u8) -> Action {
+        self.enter(Phase::Begin(heading_try))
+    }
+
+    /// The search begins ([`Phase::Begin`]).
+    #[inline(never)]
+    fn begin(&mut self, heading_try: u8) -> Action {
+        match (Search::new(self.views()), self.cheapest) {
+            (Ok(search), _) => {
+                let action = self.enter(Phase::Search(search.with_spot_share(self.share)));
+                if let Phase::Search(s) = &mut self.phase {
+                    s.skip_to(heading_try);
+                }
+                action
+            }
+            (Err(e), Some(c)) => self.searched_on(Err(e.into()), c),
+            (Err(e), None) => self.searched(Err(e.into())),
         }
     }
 
@@ -461,6 +545,56 @@ impl Survey {
             }
             Err(e) if last_view => Action::Done(Err(e)),
             _ => self.turn(),
+        }
+    }
+
+    /// A fix refined: the answer, or the search goes on past a poor fit
+    /// ([`config::refine::SEARCH_ON_STEPS`]).
+    fn refined(&mut self, fix: Fix, result: Option<Refined>) -> Action {
+        let found = Cheapest {
+            heading_try: fix.heading_try(),
+            per_reading: result.map_or(i64::MAX, |r| r.per_reading),
+            again: false,
+        };
+        let cheapest = match self.cheapest {
+            // the cheapest, found again to be reported
+            Some(c) if c.again => return Action::Done(Ok(fix)),
+            Some(c) if c.per_reading <= found.per_reading => c,
+            _ => found,
+        };
+        self.cheapest = Some(cheapest);
+        // a fit that explains the readings is the cheapest: those before
+        // it all fit poorly
+        if !result.is_some_and(|r| r.poor()) || found.heading_try >= LAST_TRY_ON || self.elapsed > SEARCH_ON_TICKS {
+            return self.report_cheapest(fix);
+        }
+        self.search_on(found.heading_try.saturating_add(1))
+    }
+
+    /// The search going on past a poor fit has an answer: the next place
+    /// to refine, or the cheapest fit so far reported. Called from the
+    /// tick, not from [`Survey::searched`]: the search that goes on is not
+    /// on the robot's stack under another.
+    fn searched_on(&mut self, result: Result<Fix, Failure>, cheapest: Cheapest) -> Action {
+        match result {
+            Ok(fix) if cheapest.again || fix.heading_try() <= LAST_TRY_ON => self.enter(Phase::Searched(fix)),
+            Err(e) if cheapest.again => Action::Done(Err(e)),
+            // no more places within the steps searched on
+            _ => {
+                self.cheapest = Some(Cheapest { again: true, ..cheapest });
+                self.search_on(cheapest.heading_try)
+            }
+        }
+    }
+
+    /// The cheapest fit reported: `fix` when it is, else found again.
+    fn report_cheapest(&mut self, fix: Fix) -> Action {
+        match self.cheapest {
+            Some(c) if c.heading_try != fix.heading_try() => {
+                self.cheapest = Some(Cheapest { again: true, ..c });
+                self.search_on(c.heading_try)
+            }
+            _ => Action::Done(Ok(fix)),
         }
     }
 

@@ -581,6 +581,47 @@ fn the_search_a_slice_at_a_time_gives_the_same_fix() {
     assert!(steps_seen[39] > 2 * 76, "some searches needed several passes");
 }
 
+/// A search from a fix's own heading try finds that fix again, and one
+/// from the next try finds another at a later try or nothing
+/// (`Search::skip_to`: the survey searches on past a poor fit and finds
+/// the cheapest again to report it). Starts whose compass is 20 degrees
+/// off, so fixes come at later tries too.
+#[test]
+fn a_search_from_a_fixs_heading_try_finds_it_again() {
+    let mut rng = Rng::new(7);
+    let (mut later, mut again) = (0, 0);
+    for start in 0..30 {
+        let mut truth = random_pose_in_box(&mut rng);
+        let w = World::lab(&mut rng);
+        let mut views = vec![view(&w, &truth, &mut rng)];
+        for _ in 0..2 {
+            truth = turn(&w, &truth, 45.0, &mut rng);
+            views.push(view(&w, &truth, &mut rng));
+        }
+        for v in &mut views {
+            v.heading = v.heading.wrapping_add(Angle::from_degrees_f64(20.0));
+        }
+        let run = |heading_try: u8| {
+            let mut search = Search::new(&views).unwrap();
+            search.skip_to(heading_try);
+            loop {
+                if let Some(r) = search.step(&Arena::DEFAULT, 10_000) {
+                    break r;
+                }
+            }
+        };
+        let Ok(fix) = locate(&Arena::DEFAULT, &views) else { continue };
+        let k = fix.heading_try();
+        later += usize::from(k > 0);
+        assert_eq!(run(k), Ok(fix), "start {start}");
+        again += 1;
+        if let Ok(next) = run(k + 1) {
+            assert!(next.heading_try() > k, "start {start}: {} after {k}", next.heading_try());
+        }
+    }
+    assert!(again >= 25 && later >= 4, "{again} fixes, {later} at later tries");
+}
+
 /// A grid point where every reading would be glancing explains none of
 /// them: no fit. A front reading farther than any wall of the box, at a
 /// heading where the beam glances along the north wall from points near

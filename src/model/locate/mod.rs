@@ -124,6 +124,8 @@ pub struct Fix {
     pub compass_steps: u8,
     /// Readings the fix may leave unexplained (its pass's allowance).
     pub unexplained: u8,
+    /// The search's heading try that found it ([`Search::skip_to`]).
+    heading_try: u8,
     /// The places, heaviest first: `clusters[..count]` ([`Fix::clusters`]).
     cluster_slots: [Cluster; MAX_CLUSTERS],
     count: u8,
@@ -170,6 +172,13 @@ impl Fix {
         }
         self.pose = pose;
         self.untrusted |= !vouched;
+    }
+
+    /// The search's heading try that found it: 0 the compass's heading,
+    /// then `2n - 1` (+n steps) and `2n` (-n), [`cfg::HEADING_STEP_DEG`]
+    /// each.
+    pub fn heading_try(&self) -> u8 {
+        self.heading_try
     }
 
     /// A cluster's pose: its position at the fix's heading.
@@ -311,6 +320,18 @@ impl Search {
         Search { share: share.clamp(0, 1 << 30), axis_guess, ..self }
     }
 
+    /// Goes on from the heading try `heading_try` (as [`Fix::heading_try`]
+    /// counts them), before the search has begun: the passes of the tries
+    /// before it are not taken, and a search from a fix's own try finds
+    /// that fix again. In place (a search is 0.6 kB of the robot's stack).
+    pub fn skip_to(&mut self, heading_try: u8) {
+        if heading_try > 0 {
+            // past the compass's heading the axis's guess is over (the
+            // share the learned one, as it was)
+            (self.heading_try, self.axis_guess) = (heading_try.into(), Guess::Done);
+        }
+    }
+
     /// Searches on for up to `scores` more view scores (a view's two
     /// lidar models at a grid point and a pivot: the slice's work, about
     /// even; a grid point takes one to the pivots tried,
@@ -353,6 +374,7 @@ impl Search {
         if let Some(mut fix) = fix_from(&self.sums, &self.gather, views) {
             fix.compass_steps = u8::try_from(self.heading_try.div_ceil(2)).unwrap_or(u8::MAX);
             fix.unexplained = u8::try_from(self.allowed).unwrap_or(u8::MAX);
+            fix.heading_try = u8::try_from(self.heading_try).unwrap_or(u8::MAX);
             fix.untrusted = fix.compass_steps > 0
                 || self.axis_guess == Guess::UnderWay
                 || self.allowed > 1
@@ -477,6 +499,7 @@ fn fix_from(sums: &Sums, gather: &Gather, views: &[Option<View>; MAX_VIEWS]) -> 
         untrusted: false,
         compass_steps: 0,
         unexplained: 0,
+        heading_try: 0,
         cluster_slots: slots,
         count,
     })

@@ -104,6 +104,14 @@ pub struct Refined {
     pub per_reading: i64,
 }
 
+impl Refined {
+    /// Its readings fit worse than [`cfg::FIT_LIMIT`] apiece: the search's
+    /// place is likely not the robot's ([`cfg::SEARCH_ON_STEPS`]).
+    pub fn poor(&self) -> bool {
+        self.per_reading > FIT_LIMIT
+    }
+}
+
 /// Where a start ended.
 #[derive(Clone, Copy, Debug)]
 struct End {
