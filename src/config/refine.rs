@@ -108,6 +108,21 @@ pub const SEARCH_ON_STEPS: u8 = 6;
 /// cheapest fit again (a search from its heading and a refinement, about
 /// 10 s) and report it.
 pub const SEARCH_ON_MS: u32 = 60_000;
+/// When a search of all the views finds nothing (their compass errors
+/// differ by more than it allows, `config::locate::TURN_TOLERANCE_MM`),
+/// the search reads the last this many views from then on, and the
+/// refinement explains its place with every view and turn (issue #29's
+/// hard world: 8 of the 9 power-ups that ran out of time, trying every
+/// heading again with each new view, refine right from the last 3 or 4).
+pub const FEW_VIEWS: usize = 3;
+/// ... after a search of all the views tried headings up to this many
+/// steps each way from the compass's (`config::locate::HEADING_STEP_DEG`):
+/// 12.5 degrees, the hard world's floor bias (issue #29's 12); each
+/// heading costs up to three passes over the box for every view (87 s for
+/// five views at these 11 headings, `tests/localization/localize.rs`). At
+/// 2 steps, 969 of 1,000 hard power-ups right: the views that agree at a
+/// heading 5 to 12 degrees off were searched a few at a time instead.
+pub const ALL_VIEWS_STEPS: u8 = 5;
 /// The starts around each place: headings off the compass's, degrees
 /// (nine 4 apart fixed 2 more hard starts of 300 at 1.8 times the cost;
 /// the compass's alone 9 fewer) ...

@@ -31,6 +31,11 @@
 //!    ambiguous fix says so). A fix of one place the search cannot vouch
 //!    for ([`Fix::untrusted`]: reported uncertain) ends it too: more views
 //!    each bring their own compass error.
+//!    With the refinement on, a search of all the views tries headings
+//!    within [`config::refine::ALL_VIEWS_STEPS`] of the compass's; when
+//!    nothing fits there, the views' compass errors differ more than the
+//!    search allows, and from then on it reads the last
+//!    [`config::refine::FEW_VIEWS`] views, at every heading.
 //! 4. The fix refined with every reading ([`crate::model::locate::refine`]).
 //!    A refined fit that explains the readings poorly ([`Refined::poor`])
 //!    rests on a wrong place: the search goes on at its next headings
@@ -119,6 +124,13 @@ struct Cheapest {
 /// procedure's ticks it may go on until.
 const LAST_TRY_ON: u8 = config::refine::SEARCH_ON_STEPS.saturating_mul(2);
 const SEARCH_ON_TICKS: u32 = ticks(config::refine::SEARCH_ON_MS);
+/// Views a search reads when one of them all found nothing
+/// ([`config::refine::FEW_VIEWS`], at most the views before a search).
+const FEW_VIEWS: usize = if config::refine::FEW_VIEWS < config::locate::MIN_VIEWS {
+    config::refine::FEW_VIEWS
+} else {
+    config::locate::MIN_VIEWS
+};
 
 /// Loop ticks in `ms` (whole ticks, rounded down; const-evaluated).
 const fn ticks(ms: u32) -> u32 {
@@ -175,6 +187,10 @@ pub struct Survey {
     cheapest: Option<Cheapest>,
     /// Ticks since the procedure began.
     elapsed: u32,
+    /// The search reads the last [`FEW_VIEWS`] views only: a search of
+    /// them all found nothing (for the rest of the procedure: a search of
+    /// all the views costs more with each view).
+    few: bool,
 }
 
 impl Default for Survey {
@@ -222,6 +238,7 @@ impl Survey {
             turning: Turning::NONE,
             cheapest: None,
             elapsed: 0,
+            few: false,
         }
     }
 
@@ -251,6 +268,7 @@ impl Survey {
             turning,
             cheapest,
             elapsed,
+            few,
         } = self;
         // (the views past `count` are not read)
         *count = 0;
@@ -265,6 +283,7 @@ impl Survey {
         *turning = Turning::NONE;
         *cheapest = None;
         *elapsed = 0;
+        *few = false;
     }
 
     /// The answer when the procedure's time ran out: the fix refined as
@@ -293,6 +312,19 @@ impl Survey {
     /// Views taken so far.
     pub fn views(&self) -> &[Readings] {
         taken(&self.views, self.count)
+    }
+
+    /// The views the search reads: all of them, or the last
+    /// [`FEW_VIEWS`] once a search of them all found nothing (the fix is
+    /// the last view's either way, refined with them all, and a later
+    /// view is among the last).
+    fn searched_views(&self) -> &[Readings] {
+        let views = self.views();
+        if self.few {
+            views.get(views.len().saturating_sub(FEW_VIEWS)..).unwrap_or(views)
+        } else {
+            views
+        }
     }
 
     /// The turns between the views so far, with the lidars' readings
@@ -447,11 +479,15 @@ impl Survey {
     /// The search begins ([`Phase::Begin`]).
     #[inline(never)]
     fn begin(&mut self, heading_try: u8) -> Action {
-        match (Search::new(self.views()), self.cheapest) {
+        match (Search::new(self.searched_views()), self.cheapest) {
             (Ok(search), _) => {
                 let action = self.enter(Phase::Search(search.with_spot_share(self.share)));
+                let all_views = self.refine && !self.few && self.count > FEW_VIEWS;
                 if let Phase::Search(s) = &mut self.phase {
                     s.skip_to(heading_try);
+                    if all_views {
+                        s.up_to(config::refine::ALL_VIEWS_STEPS);
+                    }
                 }
                 action
             }
@@ -542,6 +578,12 @@ impl Survey {
                 } else {
                     Action::Done(Ok(fix))
                 }
+            }
+            // the views disagree (their compass errors differ): the last
+            // few may fit, and the refinement weighs them all
+            Err(Failure::NothingFits) if self.refine && !self.few && self.count > FEW_VIEWS => {
+                self.few = true;
+                self.search()
             }
             Err(e) if last_view => Action::Done(Err(e)),
             _ => self.turn(),

@@ -584,7 +584,8 @@ fn the_search_a_slice_at_a_time_gives_the_same_fix() {
 /// A search from a fix's own heading try finds that fix again, and one
 /// from the next try finds another at a later try or nothing
 /// (`Search::skip_to`: the survey searches on past a poor fit and finds
-/// the cheapest again to report it). Starts whose compass is 20 degrees
+/// the cheapest again to report it); one that stops short of the fix's
+/// heading (`Search::up_to`) finds nothing. Starts whose compass is 20 degrees
 /// off, so fixes come at later tries too.
 #[test]
 fn a_search_from_a_fixs_heading_try_finds_it_again() {
@@ -601,18 +602,25 @@ fn a_search_from_a_fixs_heading_try_finds_it_again() {
         for v in &mut views {
             v.heading = v.heading.wrapping_add(Angle::from_degrees_f64(20.0));
         }
-        let run = |heading_try: u8| {
+        let run_up_to = |heading_try: u8, steps: u8| {
             let mut search = Search::new(&views).unwrap();
             search.skip_to(heading_try);
+            search.up_to(steps);
             loop {
                 if let Some(r) = search.step(&Arena::DEFAULT, 10_000) {
                     break r;
                 }
             }
         };
+        let run = |heading_try: u8| run_up_to(heading_try, config::locate::HEADING_STEPS);
         let Ok(fix) = locate(&Arena::DEFAULT, &views) else { continue };
         let k = fix.heading_try();
         later += usize::from(k > 0);
+        if k > 0 {
+            // the headings before the fix's found nothing: up to them, nothing fits
+            let before = (k - 1) / 2;
+            assert_eq!(run_up_to(0, before), Err(paperbot::model::locate::LocateError::NothingFits), "start {start}");
+        }
         assert_eq!(run(k), Ok(fix), "start {start}");
         again += 1;
         if let Ok(next) = run(k + 1) {

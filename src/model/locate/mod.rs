@@ -269,6 +269,8 @@ pub struct Search {
     /// The axis's share tried at the compass's heading when no share was
     /// learned and nothing fits the nearest point: not yet, under way, done.
     axis_guess: Guess,
+    /// The last heading try ([`Search::up_to`]).
+    last_try: u32,
 }
 
 /// The search's guess of the beam's axis (see [`Search::pass_done`]).
@@ -308,6 +310,7 @@ impl Search {
             gather: Gather::EMPTY,
             share: 0,
             axis_guess: Guess::NotYet,
+            last_try: 2 * u32::from(cfg::HEADING_STEPS),
         })
     }
 
@@ -318,6 +321,13 @@ impl Search {
     pub fn with_spot_share(self, share: i32) -> Search {
         let axis_guess = if share == 0 { Guess::NotYet } else { Guess::Done };
         Search { share: share.clamp(0, 1 << 30), axis_guess, ..self }
+    }
+
+    /// Tries headings up to `steps` heading steps each way
+    /// ([`cfg::HEADING_STEP_DEG`]; at most [`cfg::HEADING_STEPS`]), not
+    /// started: nothing fits beyond.
+    pub fn up_to(&mut self, steps: u8) {
+        self.last_try = 2 * u32::from(steps.min(cfg::HEADING_STEPS));
     }
 
     /// Goes on from the heading try `heading_try` (as [`Fix::heading_try`]
@@ -339,7 +349,7 @@ impl Search {
     /// while the search goes on, then its answer (the same as
     /// [`locate`]'s). A step ends at its pass's end.
     pub fn step(&mut self, arena: &Arena, scores: u32) -> Option<Result<Fix, LocateError>> {
-        if self.heading_try > 2 * u32::from(cfg::HEADING_STEPS) {
+        if self.heading_try > self.last_try {
             return Some(Err(LocateError::NothingFits));
         }
         let views = self.tried(arena);
