@@ -542,6 +542,22 @@ fn the_search_finds_the_pose_from_random_starts() {
     assert!(one.wrong_unflagged.len() * 100 <= starts * 3, "{} wrong fixes not flagged", one.wrong_unflagged.len());
 }
 
+/// Three views of a random start in the lab's world, turned 45 degrees
+/// in place between them, the compass `off_deg` off.
+fn three_lab_views(rng: &mut Rng, off_deg: f64) -> Vec<Readings> {
+    let mut truth = random_pose_in_box(rng);
+    let w = World::lab(rng);
+    let mut views = vec![view(&w, &truth, rng)];
+    for _ in 0..2 {
+        truth = turn(&w, &truth, 45.0, rng);
+        views.push(view(&w, &truth, rng));
+    }
+    for v in &mut views {
+        v.heading = v.heading.wrapping_add(Angle::from_degrees_f64(off_deg));
+    }
+    views
+}
+
 /// The robot spreads the search over its ticks ([`Search::step`], a few
 /// hundred view scores at a time): the same answer as the search run to the end,
 /// from starts where the compass's heading fits and where it does not.
@@ -550,19 +566,8 @@ fn the_search_a_slice_at_a_time_gives_the_same_fix() {
     let mut rng = Rng::new(7);
     let mut steps_seen = Vec::new();
     for start in 0..40 {
-        let mut truth = random_pose_in_box(&mut rng);
-        let w = World::lab(&mut rng);
-        let mut views = vec![view(&w, &truth, &mut rng)];
-        for _ in 0..2 {
-            truth = turn(&w, &truth, 45.0, &mut rng);
-            views.push(view(&w, &truth, &mut rng));
-        }
-        if start % 4 == 0 {
-            // a compass 20 degrees off: passes at other headings
-            for v in &mut views {
-                v.heading = v.heading.wrapping_add(Angle::from_degrees_f64(20.0));
-            }
-        }
+        // a compass 20 degrees off: passes at other headings
+        let views = three_lab_views(&mut rng, if start % 4 == 0 { 20.0 } else { 0.0 });
         let whole = locate(&Arena::DEFAULT, &views);
         let mut search = Search::new(&views).unwrap();
         let mut steps = 0;
@@ -592,16 +597,7 @@ fn a_search_from_a_fixs_heading_try_finds_it_again() {
     let mut rng = Rng::new(7);
     let (mut later, mut again) = (0, 0);
     for start in 0..30 {
-        let mut truth = random_pose_in_box(&mut rng);
-        let w = World::lab(&mut rng);
-        let mut views = vec![view(&w, &truth, &mut rng)];
-        for _ in 0..2 {
-            truth = turn(&w, &truth, 45.0, &mut rng);
-            views.push(view(&w, &truth, &mut rng));
-        }
-        for v in &mut views {
-            v.heading = v.heading.wrapping_add(Angle::from_degrees_f64(20.0));
-        }
+        let views = three_lab_views(&mut rng, 20.0);
         let run_up_to = |heading_try: u8, steps: u8| {
             let mut search = Search::new(&views).unwrap();
             search.skip_to(heading_try);
