@@ -477,6 +477,9 @@ impl Survey {
     }
 
     /// The search begins ([`Phase::Begin`]).
+    // out of line: its search (0.6 kB) in a frame of its own beside the
+    // tick's deepest calls, not in the tick's (`cargo fw-image`: inlined,
+    // the Xtensa backend could not spill a register in the tick's frame)
     #[inline(never)]
     fn begin(&mut self, heading_try: u8) -> Action {
         match (Search::new(self.searched_views()), self.cheapest) {
