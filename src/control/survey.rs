@@ -36,8 +36,10 @@
 //!    nothing fits there, the views' compass errors differ more than the
 //!    search allows, and from then on it reads the last
 //!    [`config::refine::FEW_VIEWS`] views, at every heading.
-//! 4. The fix refined with every reading ([`crate::model::locate::refine`]).
-//!    A refined fit that explains the readings poorly ([`Refined::poor`])
+//! 4. The fix refined with every reading ([`crate::model::locate::refine`];
+//!    this and the searches: `survey/searching.rs`).
+//!    A refined fit that explains the readings poorly
+//!    ([`crate::model::locate::refine::Refined::poor`])
 //!    rests on a wrong place: the search goes on at its next headings
 //!    ([`config::refine::SEARCH_ON_STEPS`], for at most
 //!    [`config::refine::SEARCH_ON_MS`] into the procedure), each place
@@ -58,21 +60,22 @@
 
 use crate::config;
 use crate::config::timing::LOOP_HZ;
-use crate::control::goto::position_steerable;
 use crate::math::{Angle, Length};
-use crate::model::locate::refine::{Refine, Refined};
+use crate::model::locate::refine::Refine;
 use crate::model::locate::turns::Turn;
 use crate::model::locate::{Fix, Readings, Search, MAX_VIEWS};
 use crate::model::measurement::{Arena, LidarId};
 
 mod answer;
 pub mod room;
+mod searching;
 mod sweep;
 mod turning;
 mod view;
 pub use answer::{Action, Failure};
 use room::Ahead;
 pub use room::RoomLog;
+use searching::Cheapest;
 use sweep::Sweep;
 use turning::Turning;
 use view::ViewSums;
@@ -106,31 +109,6 @@ enum Phase {
     /// ([`crate::model::locate::refine`]).
     Refine(Refine),
 }
-
-/// The cheapest refined fit so far while the search goes on past fits
-/// that explain the readings poorly ([`config::refine::SEARCH_ON_STEPS`]):
-/// kept as the search's heading try that found it and its cost, not as the
-/// fix (200 bytes more of the robot's stack): reporting it, the search
-/// finds it again from that try (`again`).
-#[derive(Clone, Copy, Debug)]
-struct Cheapest {
-    heading_try: u8,
-    /// Cost a reading, Q24 sigmas squared ([`Refined::per_reading`]).
-    per_reading: i64,
-    again: bool,
-}
-
-/// The last heading try the search goes on to past a poor fit, and the
-/// procedure's ticks it may go on until.
-const LAST_TRY_ON: u8 = config::refine::SEARCH_ON_STEPS.saturating_mul(2);
-const SEARCH_ON_TICKS: u32 = ticks(config::refine::SEARCH_ON_MS);
-/// Views a search reads when one of them all found nothing
-/// ([`config::refine::FEW_VIEWS`], at most the views before a search).
-const FEW_VIEWS: usize = if config::refine::FEW_VIEWS < config::locate::MIN_VIEWS {
-    config::refine::FEW_VIEWS
-} else {
-    config::locate::MIN_VIEWS
-};
 
 /// Loop ticks in `ms` (whole ticks, rounded down; const-evaluated).
 const fn ticks(ms: u32) -> u32 {
@@ -187,7 +165,7 @@ pub struct Survey {
     cheapest: Option<Cheapest>,
     /// Ticks since the procedure began.
     elapsed: u32,
-    /// The search reads the last [`FEW_VIEWS`] views only: a search of
+    /// The search reads the last [`config::refine::FEW_VIEWS`] views only: a search of
     /// them all found nothing (for the rest of the procedure: a search of
     /// all the views costs more with each view).
     few: bool,
@@ -314,19 +292,6 @@ impl Survey {
         taken(&self.views, self.count)
     }
 
-    /// The views the search reads: all of them, or the last
-    /// [`FEW_VIEWS`] once a search of them all found nothing (the fix is
-    /// the last view's either way, refined with them all, and a later
-    /// view is among the last).
-    fn searched_views(&self) -> &[Readings] {
-        let views = self.views();
-        if self.few {
-            views.get(views.len().saturating_sub(FEW_VIEWS)..).unwrap_or(views)
-        } else {
-            views
-        }
-    }
-
     /// The turns between the views so far, with the lidars' readings
     /// taken on them: turn `j` between views `j` and `j + 1`
     /// ([`Survey::views`]), so one fewer than the views. A turn under way,
@@ -390,11 +355,8 @@ impl Survey {
     fn step(&mut self, arena: &Arena) -> Action {
         self.ticks = self.ticks.saturating_add(1);
         self.elapsed = self.elapsed.saturating_add(1);
-        // out of time to search on: the cheapest so far
-        if let (Phase::Search(_), Some(c)) = (&self.phase, self.cheapest) {
-            if !c.again && self.elapsed > SEARCH_ON_TICKS {
-                return self.searched_on(Err(Failure::OutOfTime), c);
-            }
+        if let Some(cheapest) = self.out_of_time_to_search_on() {
+            return self.searched_on(Err(Failure::OutOfTime), cheapest);
         }
         match &mut self.phase {
             Phase::View if self.view.complete() || self.ticks > VIEW_TICKS => self.view_taken(),
@@ -465,40 +427,6 @@ impl Survey {
         self.search()
     }
 
-    /// The search of the views so far ([`Phase::Begin`]).
-    fn search(&mut self) -> Action {
-        self.enter(Phase::Begin(0))
-    }
-
-    /// The search of the views so far going on from its heading try
-    /// `heading_try`, past a poor fit ([`Phase::Begin`]).
-    fn search_on(&mut self, heading_try: u8) -> Action {
-        self.enter(Phase::Begin(heading_try))
-    }
-
-    /// The search begins ([`Phase::Begin`]).
-    // out of line: its search (0.6 kB) in a frame of its own beside the
-    // tick's deepest calls, not in the tick's (`cargo fw-image`: inlined,
-    // the Xtensa backend could not spill a register in the tick's frame)
-    #[inline(never)]
-    fn begin(&mut self, heading_try: u8) -> Action {
-        match (Search::new(self.searched_views()), self.cheapest) {
-            (Ok(search), _) => {
-                let action = self.enter(Phase::Search(search.with_spot_share(self.share)));
-                let all_views = self.refine && !self.few && self.count > FEW_VIEWS;
-                if let Phase::Search(s) = &mut self.phase {
-                    s.skip_to(heading_try);
-                    if all_views {
-                        s.up_to(config::refine::ALL_VIEWS_STEPS);
-                    }
-                }
-                action
-            }
-            (Err(e), Some(c)) => self.searched_on(Err(e.into()), c),
-            (Err(e), None) => self.searched(Err(e.into())),
-        }
-    }
-
     /// Drives `mm` (forward positive) to make room before the first view.
     fn drive(&mut self, mm: i32) -> Action {
         self.room.moved_mm = mm;
@@ -566,91 +494,6 @@ impl Survey {
             }
         }
         self.enter(Phase::Settle)
-    }
-
-    /// A search's answer: the end, or another view.
-    fn searched(&mut self, result: Result<Fix, Failure>) -> Action {
-        let last_view = self.count >= MAX_VIEWS || self.room.cut_short;
-        match result {
-            // (the fix's heading is the compass's, within goto's limit)
-            Ok(fix) if (!fix.ambiguous && position_steerable(fix.sigma_x, fix.sigma_y, 1)) || last_view => {
-                if self.refine {
-                    // refined from the next tick (not here, deep in the
-                    // search's calls: `Survey::refine`)
-                    self.enter(Phase::Searched(fix))
-                } else {
-                    Action::Done(Ok(fix))
-                }
-            }
-            // the views disagree (their compass errors differ): the last
-            // few may fit, and the refinement weighs them all
-            Err(Failure::NothingFits) if self.refine && !self.few && self.count > FEW_VIEWS => {
-                self.few = true;
-                self.search()
-            }
-            Err(e) if last_view => Action::Done(Err(e)),
-            _ => self.turn(),
-        }
-    }
-
-    /// A fix refined: the answer, or the search goes on past a poor fit
-    /// ([`config::refine::SEARCH_ON_STEPS`]).
-    fn refined(&mut self, fix: Fix, result: Option<Refined>) -> Action {
-        let found = Cheapest {
-            heading_try: fix.heading_try(),
-            per_reading: result.map_or(i64::MAX, |r| r.per_reading),
-            again: false,
-        };
-        let cheapest = match self.cheapest {
-            // the cheapest, found again to be reported
-            Some(c) if c.again => return Action::Done(Ok(fix)),
-            Some(c) if c.per_reading <= found.per_reading => c,
-            _ => found,
-        };
-        self.cheapest = Some(cheapest);
-        // a fit that explains the readings is the cheapest: those before
-        // it all fit poorly
-        if !result.is_some_and(|r| r.poor()) || found.heading_try >= LAST_TRY_ON || self.elapsed > SEARCH_ON_TICKS {
-            return self.report_cheapest(fix);
-        }
-        self.search_on(found.heading_try.saturating_add(1))
-    }
-
-    /// The search going on past a poor fit has an answer: the next place
-    /// to refine, or the cheapest fit so far reported. Called from the
-    /// tick, not from [`Survey::searched`]: the search that goes on is not
-    /// on the robot's stack under another.
-    fn searched_on(&mut self, result: Result<Fix, Failure>, cheapest: Cheapest) -> Action {
-        match result {
-            Ok(fix) if cheapest.again || fix.heading_try() <= LAST_TRY_ON => self.enter(Phase::Searched(fix)),
-            Err(e) if cheapest.again => Action::Done(Err(e)),
-            // no more places within the steps searched on
-            _ => {
-                self.cheapest = Some(Cheapest { again: true, ..cheapest });
-                self.search_on(cheapest.heading_try)
-            }
-        }
-    }
-
-    /// The cheapest fit reported: `fix` when it is, else found again.
-    fn report_cheapest(&mut self, fix: Fix) -> Action {
-        match self.cheapest {
-            Some(c) if c.heading_try != fix.heading_try() => {
-                self.cheapest = Some(Cheapest { again: true, ..c });
-                self.search_on(c.heading_try)
-            }
-            _ => Action::Done(Ok(fix)),
-        }
-    }
-
-    /// The search's fix refined next ([`Phase::Refine`]). Out of line, and
-    /// from a tick: its 1.1 kB are on the robot's stack only here, not in
-    /// the search's calls (`cargo fw-image`'s stack check).
-    #[inline(never)]
-    fn refine(&mut self, fix: Fix) -> Action {
-        self.phase = Phase::Refine(Refine::new(fix, self.views(), self.turns()));
-        self.ticks = 0;
-        Action::Stand
     }
 
     fn enter(&mut self, phase: Phase) -> Action {
