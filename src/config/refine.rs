@@ -108,21 +108,42 @@ pub const SEARCH_ON_STEPS: u8 = 6;
 /// cheapest fit again (a search from its heading and a refinement, about
 /// 10 s) and report it.
 pub const SEARCH_ON_MS: u32 = 60_000;
-/// When a search of all the views finds nothing (their compass errors
+/// With the refinement on, a search reads the last this many views at
+/// most (the procedure's first search, `config::locate::MIN_VIEWS`), and
+/// the refinement explains its place with more ([`REFINE_VIEWS`]): a search
+/// of all the views costs more with each (1,000 hard power-ups,
+/// `tests/localization/localize.rs`: with every view searched, four ran
+/// out of time searching five to eight views for 30 to 90 s each, and
+/// the last four views searched and every view refined were right in
+/// each; with every view refined, 975 right against 972; the last five
+/// searched, 972; the last three, 960).
+pub const SEARCH_VIEWS: usize = super::locate::MIN_VIEWS;
+/// The refinement weighs the last this many views and the turns between
+/// them: the pivot moves from turn to turn (the lab's skid, assumed 5 mm
+/// a turn, `sim::PIVOT_SPREAD_MM`), which the refinement's one pivot does
+/// not model, so over seven turns the first views sit 10 to 13 mm off
+/// it (the lab's world, start 919 of `tests/localization/localize.rs`:
+/// eight views refined 5 degrees off, and not flagged). Five views span
+/// four turns, 180 degrees, walls on every side. 1,000 power-ups each
+/// world (with `SEARCH_VIEWS` 4): the hard world 976 right with 1 wrong
+/// and not flagged, the lab's 992 and 0; every view weighed, 975 and 1,
+/// 991 and 1; six, 975 and 992; four, 968 and 992.
+pub const REFINE_VIEWS: usize = 5;
+/// When a search of those views finds nothing (their compass errors
 /// differ by more than it allows, `config::locate::TURN_TOLERANCE_MM`),
 /// the search reads the last this many views from then on, and the
-/// refinement explains its place with every view and turn (issue #29's
+/// refinement explains its place with more ([`REFINE_VIEWS`]; issue #29's
 /// hard world: 8 of the 9 power-ups that ran out of time, trying every
 /// heading again with each new view, refine right from the last 3 or 4).
 pub const FEW_VIEWS: usize = 3;
-/// ... after a search of all the views tried headings up to this many
+/// ... after a search of those views tried headings up to this many
 /// steps each way from the compass's (`config::locate::HEADING_STEP_DEG`):
 /// 12.5 degrees, the hard world's floor bias (issue #29's 12); each
 /// heading costs up to three passes over the box for every view (87 s for
 /// five views at these 11 headings, `tests/localization/localize.rs`). At
 /// 2 steps, 969 of 1,000 hard power-ups right: the views that agree at a
 /// heading 5 to 12 degrees off were searched a few at a time instead.
-pub const ALL_VIEWS_STEPS: u8 = 5;
+pub const LAST_VIEWS_STEPS: u8 = 5;
 /// The starts around each place: headings off the compass's, degrees
 /// (nine 4 apart fixed 2 more hard starts of 300 at 1.8 times the cost;
 /// the compass's alone 9 fewer) ...

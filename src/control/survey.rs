@@ -31,13 +31,16 @@
 //!    ambiguous fix says so). A fix of one place the search cannot vouch
 //!    for ([`Fix::untrusted`]: reported uncertain) ends it too: more views
 //!    each bring their own compass error.
-//!    With the refinement on, a search of all the views tries headings
-//!    within [`config::refine::ALL_VIEWS_STEPS`] of the compass's; when
-//!    nothing fits there, the views' compass errors differ more than the
-//!    search allows, and from then on it reads the last
+//!    With the refinement on, a search reads the last
+//!    [`config::refine::SEARCH_VIEWS`] views and tries headings within
+//!    [`config::refine::LAST_VIEWS_STEPS`] of the compass's; when nothing
+//!    fits there, the views' compass errors differ more than the search
+//!    allows, and from then on it reads the last
 //!    [`config::refine::FEW_VIEWS`] views, at every heading.
-//! 4. The fix refined with every reading ([`crate::model::locate::refine`];
-//!    this and the searches: `survey/searching.rs`).
+//! 4. The fix refined with every reading of the last
+//!    [`config::refine::REFINE_VIEWS`] views and the turns between them
+//!    ([`crate::model::locate::refine`]; this and the searches:
+//!    `survey/searching.rs`).
 //!    A refined fit that explains the readings poorly
 //!    ([`crate::model::locate::refine::Refined::poor`])
 //!    rests on a wrong place: the search goes on at its next headings
@@ -135,6 +138,14 @@ fn between(turns: &[Turn], count: usize) -> &[Turn] {
     turns.get(..count.saturating_sub(1)).unwrap_or(turns)
 }
 
+/// Of `views` and the `turns` between them, those the refinement weighs:
+/// the last [`config::refine::REFINE_VIEWS`] views and the turns between
+/// those.
+fn weighed<'a>(views: &'a [Readings], turns: &'a [Turn]) -> (&'a [Readings], &'a [Turn]) {
+    let first = views.len().saturating_sub(config::refine::REFINE_VIEWS);
+    (views.get(first..).unwrap_or(views), turns.get(first..).unwrap_or(&[]))
+}
+
 /// The procedure (see the module docs).
 #[derive(Clone, Debug)]
 pub struct Survey {
@@ -165,9 +176,9 @@ pub struct Survey {
     cheapest: Option<Cheapest>,
     /// Ticks since the procedure began.
     elapsed: u32,
-    /// The search reads the last [`config::refine::FEW_VIEWS`] views only: a search of
-    /// them all found nothing (for the rest of the procedure: a search of
-    /// all the views costs more with each view).
+    /// The search reads the last [`config::refine::FEW_VIEWS`] views only:
+    /// a search of the last [`config::refine::SEARCH_VIEWS`] found nothing
+    /// (for the rest of the procedure).
     few: bool,
 }
 
@@ -383,7 +394,7 @@ impl Survey {
             }
             Phase::Refine(refine) => {
                 // (the fields, not `views()` and `turns()`: the phase is borrowed)
-                let (views, turns) = (taken(&self.views, self.count), between(&self.turns, self.count));
+                let (views, turns) = weighed(taken(&self.views, self.count), between(&self.turns, self.count));
                 match refine.step(arena, views, turns) {
                     None => Action::Stand,
                     Some(result) => {

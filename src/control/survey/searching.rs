@@ -1,6 +1,8 @@
 //! The survey's searches and their answers: a search begun from the tick
-//! ([`Phase::Begin`]), of all the views or the last few
-//! ([`config::refine::FEW_VIEWS`]); its fix refined with every reading;
+//! ([`Phase::Begin`]), of the last views
+//! ([`config::refine::SEARCH_VIEWS`]) or the last few
+//! ([`config::refine::FEW_VIEWS`]); its fix refined with every reading of
+//! the last [`config::refine::REFINE_VIEWS`] views;
 //! and the search going on past a refined fit that explains the readings
 //! poorly ([`config::refine::SEARCH_ON_STEPS`]), each place found at the
 //! next headings refined and the cheapest fit reported, found again by the
@@ -8,6 +10,7 @@
 
 use super::{ticks, Action, Failure, Phase, Survey};
 use crate::config;
+use crate::config::locate::MIN_VIEWS;
 use crate::control::goto::position_steerable;
 use crate::model::locate::refine::{Refine, Refined};
 use crate::model::locate::{Fix, Readings, Search, MAX_VIEWS};
@@ -25,10 +28,19 @@ pub(super) struct Cheapest {
     again: bool,
 }
 
-/// Views a search reads when a search of them all found nothing
+/// Views a search reads at most with the refinement on
+/// ([`config::refine::SEARCH_VIEWS`]) ...
+const SEARCH_VIEWS: usize = config::refine::SEARCH_VIEWS;
+/// ... and when a search of those found nothing
 /// ([`config::refine::FEW_VIEWS`]): fewer than the views before a search.
 const FEW_VIEWS: usize = config::refine::FEW_VIEWS;
-const _: () = assert!(FEW_VIEWS >= 1 && FEW_VIEWS < config::locate::MIN_VIEWS);
+// (the refinement weighs every view the search read, and more)
+const _: () = assert!(
+    FEW_VIEWS >= 1
+        && FEW_VIEWS < MIN_VIEWS
+        && SEARCH_VIEWS >= MIN_VIEWS
+        && config::refine::REFINE_VIEWS >= SEARCH_VIEWS
+);
 
 /// The last heading try the search goes on to past a poor fit, and the
 /// procedure's ticks it may go on until.
@@ -36,23 +48,26 @@ const LAST_TRY_ON: u8 = config::refine::SEARCH_ON_STEPS.saturating_mul(2);
 const SEARCH_ON_TICKS: u32 = ticks(config::refine::SEARCH_ON_MS);
 
 impl Survey {
-    /// The views the search reads: all of them, or the last
-    /// [`FEW_VIEWS`] once a search of them all found nothing (the fix is
-    /// the last view's either way, refined with them all, and a later
-    /// view is among the last).
+    /// The views the search reads: all of them without the refinement;
+    /// with it the last [`SEARCH_VIEWS`], or the last [`FEW_VIEWS`] once a
+    /// search of those found nothing (the fix is the last view's either
+    /// way, refined with the last [`config::refine::REFINE_VIEWS`], and a
+    /// later view is among the last).
     fn searched_views(&self) -> &[Readings] {
         let views = self.views();
-        if self.few {
-            views.get(views.len().saturating_sub(FEW_VIEWS)..).unwrap_or(views)
-        } else {
-            views
-        }
+        let last = match (self.refine, self.few) {
+            (false, _) => views.len(),
+            (true, false) => SEARCH_VIEWS,
+            (true, true) => FEW_VIEWS,
+        };
+        views.get(views.len().saturating_sub(last)..).unwrap_or(views)
     }
 
-    /// The search reads all the views, at the headings near the compass's
-    /// ([`config::refine::ALL_VIEWS_STEPS`]), before the last few
-    /// ([`FEW_VIEWS`]): with the refinement on, and more views than those.
-    fn all_views_first(&self) -> bool {
+    /// The search reads the last [`SEARCH_VIEWS`], at the headings near
+    /// the compass's ([`config::refine::LAST_VIEWS_STEPS`]), before the
+    /// last few ([`FEW_VIEWS`]): with the refinement on, and more views
+    /// than those.
+    fn last_views_first(&self) -> bool {
         self.refine && !self.few && self.count > FEW_VIEWS
     }
 
@@ -70,11 +85,11 @@ impl Survey {
         match (Search::new(self.searched_views()), self.cheapest) {
             (Ok(search), _) => {
                 let action = self.enter(Phase::Search(search.with_spot_share(self.share)));
-                let all_views = self.all_views_first();
+                let last_views = self.last_views_first();
                 if let Phase::Search(s) = &mut self.phase {
                     s.skip_to(heading_try);
-                    if all_views {
-                        s.up_to(config::refine::ALL_VIEWS_STEPS);
+                    if last_views {
+                        s.up_to(config::refine::LAST_VIEWS_STEPS);
                     }
                 }
                 action
@@ -100,7 +115,7 @@ impl Survey {
             }
             // the views disagree (their compass errors differ): the last
             // few may fit, and the refinement weighs them all
-            Err(Failure::NothingFits) if self.all_views_first() => {
+            Err(Failure::NothingFits) if self.last_views_first() => {
                 self.few = true;
                 self.search()
             }
@@ -114,7 +129,8 @@ impl Survey {
     /// the search's calls (`cargo fw-image`'s stack check).
     #[inline(never)]
     pub(super) fn refine(&mut self, fix: Fix) -> Action {
-        self.phase = Phase::Refine(Refine::new(fix, self.views(), self.turns()));
+        let (views, turns) = super::weighed(self.views(), self.turns());
+        self.phase = Phase::Refine(Refine::new(fix, views, turns));
         self.ticks = 0;
         Action::Stand
     }
