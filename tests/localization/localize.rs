@@ -28,6 +28,19 @@ struct Run {
     steerable: bool,
 }
 
+impl Run {
+    /// Within 30 mm and 5 degrees of the truth (issue #29's right fix).
+    fn right(&self) -> bool {
+        self.off_mm <= 30.0 && self.off_deg <= 5.0
+    }
+
+    /// Located, and right: `what` names the power-up when not.
+    fn assert_located_right(&self, what: impl std::fmt::Display) {
+        assert!(self.line.starts_with("# located "), "{what}: {}", self.line);
+        assert!(self.right(), "{what}: {} off {:.1} mm {:.1} deg", self.line, self.off_mm, self.off_deg);
+    }
+}
+
 /// Powers up at `start` and runs until the procedure ends (at most its
 /// time limit and a second).
 fn power_up(start: PoseF64, seed: u64, realism: Realism, refine: bool) -> Run {
@@ -75,7 +88,7 @@ fn power_ups(name: &str, realism: Realism, refine: bool) -> (usize, usize, usize
             continue;
         }
         let flagged = run.line.contains("ambiguous") || run.line.contains("uncertain");
-        let ok = run.off_mm <= 30.0 && run.off_deg <= 5.0;
+        let ok = run.right();
         right += usize::from(ok);
         ambiguous += usize::from(flagged);
         if !ok && !flagged {
@@ -116,15 +129,7 @@ fn a_refined_power_up_finds_the_pose() {
     let mut rng = Rng::new(77);
     for i in 0..20 {
         let start = random_pose_in_box(&mut rng);
-        let run = power_up(start, 500 + i, Realism::LAB, true);
-        assert!(run.line.starts_with("# located "), "{start:?}: {}", run.line);
-        assert!(
-            run.off_mm <= 30.0 && run.off_deg <= 5.0,
-            "{start:?}: {} off {:.1} mm {:.1} deg",
-            run.line,
-            run.off_mm,
-            run.off_deg
-        );
+        power_up(start, 500 + i, Realism::LAB, true).assert_located_right(format_args!("{start:?}"));
     }
 }
 
@@ -183,15 +188,7 @@ fn power_ups_are_right(realism: Realism, starts: &[usize]) {
     let mut rng = Rng::new(1523);
     let poses: Vec<PoseF64> = (0..1_000).map(|_| random_pose_in_box(&mut rng)).collect();
     for &i in starts {
-        let run = power_up(poses[i], i as u64, realism, true);
-        assert!(run.line.starts_with("# located "), "start {i}: {}", run.line);
-        assert!(
-            run.off_mm <= 30.0 && run.off_deg <= 5.0,
-            "start {i}: {} off {:.0} mm {:.1} deg",
-            run.line,
-            run.off_mm,
-            run.off_deg
-        );
+        power_up(poses[i], i as u64, realism, true).assert_located_right(format_args!("start {i}"));
     }
 }
 
