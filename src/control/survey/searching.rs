@@ -114,7 +114,7 @@ impl Survey {
                 }
             }
             // the views disagree (their compass errors differ): the last
-            // few may fit, and the refinement weighs them all
+            // few may fit, and the refinement weighs more (`REFINE_VIEWS`)
             Err(Failure::NothingFits) if self.last_views_first() => {
                 self.few = true;
                 self.search()
