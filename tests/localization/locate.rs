@@ -602,11 +602,7 @@ fn a_search_from_a_fixs_heading_try_finds_it_again() {
             let mut search = Search::new(&views).unwrap();
             search.skip_to(heading_try);
             search.up_to(steps);
-            loop {
-                if let Some(r) = search.step(&Arena::DEFAULT, 10_000) {
-                    break r;
-                }
-            }
+            search.finish(&Arena::DEFAULT)
         };
         let run = |heading_try: u8| run_up_to(heading_try, config::locate::HEADING_STEPS);
         let Ok(fix) = locate(&Arena::DEFAULT, &views) else { continue };

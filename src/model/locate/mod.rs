@@ -232,12 +232,5 @@ pub fn locate(arena: &Arena, views: &[Readings]) -> Result<Fix, LocateError> {
 /// [`locate`] reading each range `share` of the way into its spot
 /// ([`Search::with_spot_share`]).
 pub fn locate_with_spot_share(arena: &Arena, views: &[Readings], share: i32) -> Result<Fix, LocateError> {
-    let mut search = Search::new(views)?.with_spot_share(share);
-    // a step ends its pass at the latest
-    for _ in 0..=Search::MAX_PASSES {
-        if let Some(result) = search.step(arena, u32::MAX) {
-            return result;
-        }
-    }
-    Err(LocateError::NothingFits)
+    Search::new(views)?.with_spot_share(share).finish(arena)
 }

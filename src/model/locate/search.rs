@@ -147,6 +147,18 @@ impl Search {
         None
     }
 
+    /// Searches on to the answer ([`Search::step`] until it has one), in
+    /// one call.
+    pub fn finish(mut self, arena: &Arena) -> Result<Fix, LocateError> {
+        // a step ends its pass at the latest
+        for _ in 0..=Search::MAX_PASSES {
+            if let Some(result) = self.step(arena, u32::MAX) {
+                return result;
+            }
+        }
+        Err(LocateError::NothingFits)
+    }
+
     /// A pass is over: its fix, or the next pass.
     fn pass_done(&mut self, views: &[Option<View>; MAX_VIEWS]) -> Option<Result<Fix, LocateError>> {
         self.gather.settle();
