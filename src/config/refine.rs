@@ -129,6 +129,21 @@ pub const SEARCH_VIEWS: usize = super::locate::MIN_VIEWS;
 /// and not flagged, the lab's 992 and 0; every view weighed, 975 and 1,
 /// 991 and 1; six, 975 and 992; four, 968 and 992.
 pub const REFINE_VIEWS: usize = 5;
+/// A view whose compass heading is within this of the next view's is
+/// repeated by it, degrees: the turn between them was blocked
+/// (`config::locate::BLOCKED_TURN_DEG`, the body against a wall) and the
+/// body stayed, or twisted a little. A search with the refinement on reads
+/// the later view only and counts the pair as one of its last
+/// [`SEARCH_VIEWS`]: with both, the window held one view fewer that
+/// tells places apart, and a repeat's readings that disagree (a corner's
+/// mixed return in one) can move the place. Four compass sigmas
+/// (`estimator::COMPASS_SIGMA_DEG`): a turn the compass shows past it
+/// moved the beams onto other wall points. 1,000 hard power-ups
+/// (`tests/localization/localize.rs`): 979 right, against 976 with
+/// repeats searched; at 5 degrees 978 (a twist of 6.6 degrees repeated),
+/// at 15 and 20 978 (a blocked turn of 14 degrees whose two views each
+/// helped).
+pub const REPEAT_DEG: f64 = 4.0 * estimator::COMPASS_SIGMA_DEG;
 /// When a search of those views finds nothing (their compass errors
 /// differ by more than it allows, `config::locate::TURN_TOLERANCE_MM`),
 /// the search reads the last this many views from then on, and the

@@ -33,7 +33,9 @@
 //!    for ([`Fix::untrusted`]: reported uncertain) ends it too: more views
 //!    each bring their own compass error.
 //!    With the refinement on, a search reads the last
-//!    [`config::refine::SEARCH_VIEWS`] views and tries headings within
+//!    [`config::refine::SEARCH_VIEWS`] views (a view the next one repeats,
+//!    [`config::refine::REPEAT_DEG`], counted once: the later one read)
+//!    and tries headings within
 //!    [`config::refine::LAST_VIEWS_STEPS`] of the compass's; when nothing
 //!    fits there, the views' compass errors differ more than the search
 //!    allows, and from then on it reads the last

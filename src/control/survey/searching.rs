@@ -12,8 +12,9 @@ use super::{ticks, Action, Failure, Phase, Survey};
 use crate::config;
 use crate::config::locate::MIN_VIEWS;
 use crate::control::goto::position_steerable;
+use crate::math::Angle;
 use crate::model::locate::refine::{Refine, Refined};
-use crate::model::locate::{Fix, Readings, Search, MAX_VIEWS};
+use crate::model::locate::{Fix, LocateError, Readings, Search, MAX_VIEWS};
 
 /// The cheapest refined fit so far while the search goes on past fits
 /// that explain the readings poorly ([`config::refine::SEARCH_ON_STEPS`]):
@@ -42,6 +43,23 @@ const _: () = assert!(
         && config::refine::REFINE_VIEWS >= SEARCH_VIEWS
 );
 
+/// [`config::refine::REPEAT_DEG`] in angle LSB (under a quarter turn).
+const REPEAT: i32 = Angle::from_degrees_f64(config::refine::REPEAT_DEG).0 as i32;
+
+/// View `i` of `views` is repeated by the next: the turn between them was
+/// blocked ([`config::refine::REPEAT_DEG`]).
+fn repeated(views: &[Readings], i: usize) -> bool {
+    match (views.get(i), views.get(i.saturating_add(1))) {
+        (Some(a), Some(b)) => b.heading.diff(a.heading).saturating_abs() < REPEAT,
+        _ => false,
+    }
+}
+
+/// The views of `views` the next one does not repeat.
+fn unrepeated(views: &[Readings]) -> impl Iterator<Item = Readings> + '_ {
+    views.iter().enumerate().filter(|&(i, _)| !repeated(views, i)).map(|(_, v)| *v)
+}
+
 /// The last heading try the search goes on to past a poor fit, and the
 /// procedure's ticks it may go on until.
 const LAST_TRY_ON: u8 = config::refine::SEARCH_ON_STEPS.saturating_mul(2);
@@ -50,17 +68,36 @@ const SEARCH_ON_TICKS: u32 = ticks(config::refine::SEARCH_ON_MS);
 impl Survey {
     /// The views the search reads: all of them without the refinement;
     /// with it the last [`SEARCH_VIEWS`], or the last [`FEW_VIEWS`] once a
-    /// search of those found nothing (the fix is the last view's either
-    /// way, refined with the last [`config::refine::REFINE_VIEWS`], and a
-    /// later view is among the last).
+    /// search of those found nothing, a view the next one repeats not
+    /// counted ([`config::refine::REPEAT_DEG`]; the search reads the later
+    /// of the two). The fix is the last view's either way, refined with
+    /// the last [`config::refine::REFINE_VIEWS`], and a later view is among
+    /// the last.
     fn searched_views(&self) -> &[Readings] {
         let views = self.views();
         let last = match (self.refine, self.few) {
-            (false, _) => views.len(),
+            (false, _) => return views,
             (true, false) => SEARCH_VIEWS,
             (true, true) => FEW_VIEWS,
         };
-        views.get(views.len().saturating_sub(last)..).unwrap_or(views)
+        // back from the newest, a view the next repeats not counted
+        let (mut first, mut counted) = (views.len(), 0usize);
+        while first > 0 && counted < last {
+            first = first.saturating_sub(1);
+            counted = counted.saturating_add(usize::from(!repeated(views, first)));
+        }
+        views.get(first..).unwrap_or(views)
+    }
+
+    /// The search of [`Survey::searched_views`]; with the refinement on,
+    /// of those the next does not repeat.
+    fn new_search(&self) -> Result<Search, LocateError> {
+        let views = self.searched_views();
+        if self.refine {
+            Search::of(unrepeated(views))
+        } else {
+            Search::new(views)
+        }
     }
 
     /// The search reads the last [`SEARCH_VIEWS`], at the headings near
@@ -82,7 +119,7 @@ impl Survey {
     // the Xtensa backend could not spill a register in the tick's frame)
     #[inline(never)]
     pub(super) fn begin(&mut self, heading_try: u8) -> Action {
-        match (Search::new(self.searched_views()), self.cheapest) {
+        match (self.new_search(), self.cheapest) {
             (Ok(search), _) => {
                 let action = self.enter(Phase::Search(search.with_spot_share(self.share)));
                 let last_views = self.last_views_first();
@@ -198,5 +235,51 @@ impl Survey {
             }
             _ => Action::Done(Ok(fix)),
         }
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::restriction)] // test code: a panic fails the test
+mod tests {
+    use super::*;
+    use crate::math::Length;
+    use std::vec::Vec;
+
+    /// A survey with views at `headings` (degrees), each reading 300 mm
+    /// ahead and 200 mm to the right.
+    fn surveyed(headings: &[f64]) -> Survey {
+        let mut s = Survey::new();
+        for (slot, &deg) in s.views.iter_mut().zip(headings) {
+            let (d, r) = (Length::from_mm(300), Length::from_mm(200));
+            *slot = Readings { heading: Angle::from_degrees_f64(deg), front: Some(d), right: Some(r) };
+        }
+        s.count = headings.len();
+        s
+    }
+
+    fn degrees(views: impl Iterator<Item = Readings>) -> Vec<f64> {
+        views.map(|v| (f64::from(v.heading.to_millidegrees()) / 100.0).round() / 10.0).collect()
+    }
+
+    /// A view the next one repeats (a blocked turn between them) does not
+    /// count among the last views the search reads, and the search reads
+    /// the later of the two only; a turn the compass shows past
+    /// `REPEAT_DEG` is a view of its own.
+    #[test]
+    fn a_repeated_view_is_searched_once() {
+        let step = config::refine::REPEAT_DEG;
+        let s = surveyed(&[0.0, 45.0, 90.0, 135.0, 135.0 + step - 0.5]);
+        assert_eq!(s.searched_views().len(), 5);
+        assert_eq!(degrees(unrepeated(s.searched_views())), [0.0, 45.0, 90.0, 135.0 + step - 0.5]);
+        let s = surveyed(&[0.0, 45.0, 90.0, 135.0, 135.0 + step + 0.5]);
+        assert_eq!(degrees(unrepeated(s.searched_views())), [45.0, 90.0, 135.0, 135.0 + step + 0.5]);
+    }
+
+    /// Without the refinement the search reads every view, repeats too.
+    #[test]
+    fn without_the_refinement_every_view_is_searched() {
+        let mut s = surveyed(&[0.0, 45.0, 90.0, 135.0, 135.0, 180.0]);
+        s.set_refine(false);
+        assert_eq!(s.searched_views().len(), 6);
     }
 }

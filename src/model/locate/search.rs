@@ -58,18 +58,26 @@ impl Search {
 
     /// A search of `views` (the first [`MAX_VIEWS`]), not started.
     pub fn new(views: &[Readings]) -> Result<Search, LocateError> {
-        let views = views.get(..MAX_VIEWS).unwrap_or(views);
+        Search::of(views.iter().copied())
+    }
+
+    /// A search of the views `views` yields (the first [`MAX_VIEWS`]), not
+    /// started.
+    pub fn of(views: impl Iterator<Item = Readings>) -> Result<Search, LocateError> {
+        let mut kept = [Readings { heading: Angle::ZERO, front: None, right: None }; MAX_VIEWS];
+        let mut count: usize = 0;
+        for (slot, r) in kept.iter_mut().zip(views) {
+            *slot = r;
+            count = count.saturating_add(1);
+        }
+        let views = kept.get(..count).unwrap_or(&[]);
         if views.iter().all(|r| r.front.is_none() && r.right.is_none()) {
             return Err(LocateError::NoReading);
-        }
-        let mut kept = [Readings { heading: Angle::ZERO, front: None, right: None }; MAX_VIEWS];
-        for (slot, r) in kept.iter_mut().zip(views) {
-            *slot = *r;
         }
         let readings = views.iter().map(|r| u32::from(r.front.is_some()) + u32::from(r.right.is_some())).sum();
         Ok(Search {
             views: kept,
-            count: views.len(),
+            count,
             readings,
             heading_try: 0,
             allowed: 0,
