@@ -69,18 +69,38 @@ fn power_up(start: PoseF64, seed: u64, realism: Realism, refine: bool) -> Run {
     panic!("no answer from the localization at {start:?}");
 }
 
+/// A set of 1,000 power-ups: where the starts are drawn from, and the
+/// first run's seed (each run's world, `sim::drawn`, and noise).
+#[derive(Clone, Copy)]
+struct Set {
+    starts_seed: u64,
+    first_seed: u64,
+}
+
+/// The set every figure and test here was measured on, and the
+/// localization's constants chosen by.
+const TUNED: Set = Set { starts_seed: 1523, first_seed: 0 };
+/// Two sets nothing was chosen by: what a new robot's power-ups would
+/// measure (`the_robot_finds_itself_in_the_hard_world`).
+const HELD_OUT: [Set; 2] = [Set { starts_seed: 6151, first_seed: 5_000 }, Set { starts_seed: 9209, first_seed: 9_000 }];
+
 /// The tally of 1,000 power-ups in `realism`, the fixes refined or not
 /// (`config::refine`): (right, ambiguous, failed, wrong and not flagged,
 /// steerable).
 fn power_ups(name: &str, realism: Realism, refine: bool) -> (usize, usize, usize, usize, usize) {
-    let mut rng = Rng::new(1523);
+    power_ups_of(TUNED, name, realism, refine)
+}
+
+/// [`power_ups`] of `set`.
+fn power_ups_of(set: Set, name: &str, realism: Realism, refine: bool) -> (usize, usize, usize, usize, usize) {
+    let mut rng = Rng::new(set.starts_seed);
     let starts = 1_000;
     let (mut right, mut ambiguous, mut failed, mut steerable) = (0, 0, 0, 0);
     let mut wrong_unflagged = vec![];
     let mut seconds = vec![];
     for i in 0..starts {
         let start = random_pose_in_box(&mut rng);
-        let run = power_up(start, i, realism, refine);
+        let run = power_up(start, set.first_seed + i, realism, refine);
         seconds.push(run.seconds);
         steerable += usize::from(run.steerable);
         if !run.line.starts_with("# located ") {
@@ -97,9 +117,10 @@ fn power_ups(name: &str, realism: Realism, refine: bool) -> (usize, usize, usize
     }
     seconds.sort_by(f64::total_cmp);
     println!(
-        "{name} world, power-up localization{}: {right} of {starts} right (30 mm, 5 deg); {ambiguous} reported ambiguous or uncertain; \
+        "{name} world, power-up localization{}{}: {right} of {starts} right (30 mm, 5 deg); {ambiguous} reported ambiguous or uncertain; \
          {failed} failed; {} wrong and not flagged; {steerable} certain enough for goto a second later; time median {:.1} s, 95th percentile {:.1} s, worst {:.1} s",
         if refine { ", refined" } else { "" },
+        if set.first_seed == TUNED.first_seed { String::new() } else { format!(", held-out seeds from {}", set.first_seed) },
         wrong_unflagged.len(),
         seconds[starts as usize / 2],
         seconds[starts as usize * 95 / 100],
@@ -140,8 +161,9 @@ fn a_refined_power_up_finds_the_pose() {
 /// fix refined with every reading (`config::refine::ENABLED`, on by
 /// default): measured `HARD_REFINED`; asserted: no worse than that, at
 /// least twice the right fixes and at most half the wrong and not flagged,
-/// and the lab's 1,000 refined within the lab's bar. Ignored for its time
-/// (a minute in release):
+/// the two held-out sets no worse than `HARD_HELD_OUT` (1,000 power-ups
+/// each that no constant was chosen by), and the lab's 1,000 refined
+/// within the lab's bar. Ignored for its time (two minutes in release):
 /// `cargo test --release --test localization localize:: -- --ignored --nocapture`.
 #[test]
 #[ignore = "minutes: the hard world's failing searches try every heading; prints issue #29's figures"]
@@ -162,6 +184,14 @@ fn the_robot_finds_itself_in_the_hard_world() {
     assert!(refined_right >= 2 * right && 2 * refined_wrong <= wrong_unflagged, "{refined_right}, {refined_wrong}");
     let (refined_floor, refined_ceiling) = HARD_REFINED;
     assert!(refined_right >= refined_floor && refined_wrong <= refined_ceiling, "{refined_right}, {refined_wrong}");
+    // the held-out sets: what the constants chosen on the tuned set give
+    // where nothing was chosen
+    for (set, (floor, ceiling)) in HELD_OUT.into_iter().zip(HARD_HELD_OUT) {
+        let (right, _, _, wrong, _) = power_ups_of(set, "hard", Realism::HARD, true);
+        let bar = right * 100 >= starts * 98 && wrong * 1000 <= starts * 2;
+        println!("hard world, refined, held out: issue #29's bar {}", if bar { "met" } else { "NOT met (advisory)" });
+        assert!(right >= floor && wrong <= ceiling, "held out from seed {}: {right}, {wrong}", set.first_seed);
+    }
     // the lab's world refined: its bar (`the_robot_finds_itself_at_power_up_
     // from_random_starts`); measured 992 right and 0 wrong and not flagged
     // against 986 and 0 unrefined
@@ -272,6 +302,20 @@ fn a_view_a_blocked_turn_repeats_is_searched_once() {
 /// the survey asked its earlier views about the left, `control::survey::
 /// room::left_clear`.)
 const HARD_REFINED: (usize, usize) = (979, 1);
+
+/// Measured on the held-out sets (`HELD_OUT`), refined: (right, wrong and
+/// not flagged); also 4 and 1 failed (out of time), 770 and 755 flagged,
+/// time 95th percentile 47.0 and 35.7 s. The tuned set's 979 and 1 are
+/// partly the choosing: every constant of the survey and the refinement
+/// was kept or dropped by its count there (and its starts were the ones
+/// studied), and these sets measure what the same firmware does on
+/// power-ups none of it was chosen by: 95.3 and 96.7 % right, 0.7 and
+/// 0.3 % wrong and not flagged. The tuned set's starts with the held-out
+/// seeds measured 973 and 974. `config::refine::REPEAT_DEG`'s repeats
+/// counted once: 953 and 967 against 954 and 966 without (the three
+/// starts it mends are the tuned set's).
+/// Asserted: no worse than that.
+const HARD_HELD_OUT: [(usize, usize); 2] = [(953, 7), (967, 3)];
 
 /// Measured in the hard world, 1,000 power-ups unrefined: (right, wrong
 /// and not flagged). Also: 787 reported ambiguous or uncertain, 9 failed
