@@ -29,7 +29,10 @@
 //!    ([`crate::config::goto::MAX_SIGMA_MM`]) ends the procedure;
 //!    otherwise (ambiguous, too uncertain, or nothing fits) another turn
 //!    and view, up to [`MAX_VIEWS`], whose answer is taken as it is (an
-//!    ambiguous fix says so). A fix of one place the search cannot vouch
+//!    ambiguous fix says so); when neither way has room to turn, the
+//!    search's answer is the last ([`RoomLog::cut_short`]:
+//!    a search of the same views again finds the same). A fix of one
+//!    place the search cannot vouch
 //!    for ([`Fix::untrusted`]: reported uncertain) ends it too: more views
 //!    each bring their own compass error.
 //!    With the refinement on, a search reads the last

@@ -52,10 +52,10 @@ impl Survey {
         self.enter(Phase::Drive { forward: mm > 0, ticks: ticks(ms.unwrap_or(0)) })
     }
 
-    /// The next turn, past the edge of the swept ground the view taken
-    /// there shows room beyond, or the search of the views there are when
-    /// neither way has room.
-    pub(super) fn turn(&mut self) -> Action {
+    /// Which way the next turn has room, past the edge of the swept
+    /// ground the view taken there shows room beyond, and how sure of the
+    /// wall ahead it is; `None` when neither way has room.
+    pub(super) fn way(&self) -> Option<(bool, Ahead)> {
         let sw = self.sweep;
         let views = self.views();
         let room = |clockwise: bool, ahead: Ahead| {
@@ -65,15 +65,20 @@ impl Survey {
             })
         };
         let few = self.count < config::locate::MIN_VIEWS;
-        let way = [(self.clockwise, Ahead::Slanted), (!self.clockwise, Ahead::Slanted)]
+        [(self.clockwise, Ahead::Slanted), (!self.clockwise, Ahead::Slanted)]
             .into_iter()
             .chain(
                 few.then_some([(self.clockwise, Ahead::Square), (!self.clockwise, Ahead::Square)])
                     .into_iter()
                     .flatten(),
             )
-            .find(|&(clockwise, ahead)| room(clockwise, ahead));
-        let Some((clockwise, ahead)) = way else {
+            .find(|&(clockwise, ahead)| room(clockwise, ahead))
+    }
+
+    /// The next turn ([`Survey::way`]), or the search of the views there
+    /// are when neither way has room.
+    pub(super) fn turn(&mut self) -> Action {
+        let Some((clockwise, ahead)) = self.way() else {
             self.room.cut_short = true;
             return self.search();
         };

@@ -138,6 +138,11 @@ impl Survey {
 
     /// A search's answer: the end, or another view.
     pub(super) fn searched(&mut self, result: Result<Fix, Failure>) -> Action {
+        // no room to turn either way: these views are all there will be,
+        // and a search of them again would find the same
+        if self.way().is_none() {
+            self.room.cut_short = true;
+        }
         let last_view = self.count >= MAX_VIEWS || self.room.cut_short;
         match result {
             // (the fix's heading is the compass's, within goto's limit)
@@ -273,6 +278,26 @@ mod tests {
         assert_eq!(degrees(unrepeated(s.searched_views())), [0.0, 45.0, 90.0, 135.0 + step - 0.5]);
         let s = surveyed(&[0.0, 45.0, 90.0, 135.0, 135.0 + step + 0.5]);
         assert_eq!(degrees(unrepeated(s.searched_views())), [45.0, 90.0, 135.0, 135.0 + step + 0.5]);
+    }
+
+    /// A search whose views leave no room to turn either way is the last:
+    /// its answer stands (a search of the same views again found the same,
+    /// and ran power-ups out of time), and the room's log says so. With
+    /// room, the answer asks for another view.
+    #[test]
+    fn with_no_room_to_turn_the_search_is_not_repeated() {
+        for (front, answer) in [(30, Action::Done(Err(Failure::NothingFits))), (600, Action::Stand)] {
+            let mut s = surveyed(&[0.0, 45.0, 90.0, 135.0]);
+            for v in s.views.iter_mut().take(4) {
+                v.front = Some(Length::from_mm(front));
+                v.right = Some(Length::from_mm(600));
+            }
+            // the last views searched found nothing, and then the last few
+            s.few = true;
+            assert_eq!(s.searched(Err(Failure::NothingFits)), answer, "front {front} mm");
+            assert_eq!(s.room().cut_short, front == 30);
+            assert_eq!(matches!(s.phase, Phase::Turn), front == 600);
+        }
     }
 
     /// Without the refinement the search reads every view, repeats too.
