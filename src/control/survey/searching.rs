@@ -138,15 +138,16 @@ impl Survey {
 
     /// A search's answer: the end, or another view.
     pub(super) fn searched(&mut self, result: Result<Fix, Failure>) -> Action {
-        // no room to turn either way: these views are all there will be,
-        // and a search of them again would find the same
-        if self.way().is_none() {
+        // (the fix's heading is the compass's, within goto's limit)
+        let settles = |fix: &Fix| !fix.ambiguous && position_steerable(fix.sigma_x, fix.sigma_y, 1);
+        // another view is wanted and neither way has room to turn: these
+        // views are all there will be (a search of them again finds the same)
+        if !matches!(&result, Ok(fix) if settles(fix)) && self.way().is_none() {
             self.room.cut_short = true;
         }
         let last_view = self.count >= MAX_VIEWS || self.room.cut_short;
         match result {
-            // (the fix's heading is the compass's, within goto's limit)
-            Ok(fix) if (!fix.ambiguous && position_steerable(fix.sigma_x, fix.sigma_y, 1)) || last_view => {
+            Ok(fix) if settles(&fix) || last_view => {
                 if self.refine {
                     // refined from the next tick (not here, deep in the
                     // search's calls: `Survey::refine`)
