@@ -101,6 +101,8 @@ const fn mixture((share, narrow, wide): (f64, f64, f64)) -> Mixture {
 
 const BIAS_PRIOR: Mixture = mixture(cfg::BIAS_MIX);
 const VIEW_PRIOR: Mixture = mixture(cfg::VIEW_MIX);
+const VIEW_PRIOR_FAR: Mixture = mixture(cfg::VIEW_MIX_FAR);
+const FAR_LEVER: i64 = Length::from_mm_f64(cfg::FAR_LEVER_MM).0 as i64;
 const TURN_INV: i64 = inv(deg(cfg::TURN_SIGMA_DEG));
 /// The lever's prior: the pivot anywhere the estimator allows
 /// (`PIVOT_MIN_MM` to `PIVOT_MAX_MM` behind the axle), its mean and a
@@ -253,7 +255,9 @@ impl Model<'_> {
             if slice.take() {
                 let predicted = get(k).saturating_add(get(BIAS));
                 let miss = i64::from(v.heading.diff(Angle(predicted as u32)));
-                f(&mixed(miss, VIEW_PRIOR, &[k, BIAS], -1));
+                // the compass moves farther between views about a far pivot
+                let prior = if get(LEVER) > FAR_LEVER { VIEW_PRIOR_FAR } else { VIEW_PRIOR };
+                f(&mixed(miss, prior, &[k, BIAS], -1));
             }
         }
         for (j, t) in self.turns.iter().enumerate().take(views.len().saturating_sub(1)) {
