@@ -88,7 +88,7 @@ const fn deg(d: f64) -> f64 {
 /// and what the wide part costs over the narrow one at zero (Q24), twice
 /// `ln((wide / narrow) (share / (1 - share)))`.
 #[derive(Clone, Copy)]
-struct Mixture {
+pub(super) struct Mixture {
     narrow: i64,
     wide: i64,
     extra: i64,
@@ -255,9 +255,7 @@ impl Model<'_> {
             if slice.take() {
                 let predicted = get(k).saturating_add(get(BIAS));
                 let miss = i64::from(v.heading.diff(Angle(predicted as u32)));
-                // the compass moves farther between views about a far pivot
-                let prior = if get(LEVER) > FAR_LEVER { VIEW_PRIOR_FAR } else { VIEW_PRIOR };
-                f(&mixed(miss, prior, &[k, BIAS], -1));
+                f(&mixed(miss, view_prior(get(LEVER)), &[k, BIAS], -1));
             }
         }
         for (j, t) in self.turns.iter().enumerate().take(views.len().saturating_sub(1)) {
@@ -409,7 +407,18 @@ impl Model<'_> {
 /// A max-mixture prior's row for `miss` (angle LSB) in the parameters
 /// `cols`, each moving it by `sign` mrad a unit: the part that explains
 /// it better.
-fn mixed(miss: i64, m: Mixture, cols: &[usize], sign: i64) -> Row {
+/// A view's compass prior with the lever at `lever` (Q16 mm): the
+/// compass moves farther between views about a far pivot
+/// ([`cfg::VIEW_MIX_FAR`]).
+pub(super) fn view_prior(lever: i64) -> Mixture {
+    if lever > FAR_LEVER {
+        VIEW_PRIOR_FAR
+    } else {
+        VIEW_PRIOR
+    }
+}
+
+pub(super) fn mixed(miss: i64, m: Mixture, cols: &[usize], sign: i64) -> Row {
     let narrow = mul_shr(miss, m.narrow, 28);
     let wide = mul_shr(miss, m.wide, 28);
     let (r, inv, extra) = if narrow.saturating_mul(narrow) <= wide.saturating_mul(wide).saturating_add(m.extra) {

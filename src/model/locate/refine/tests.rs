@@ -224,3 +224,22 @@ fn a_readings_sigma_grows_with_range_and_glancing_readings_say_nothing() {
     let inside = front_row(700.0, 50.0, 55.0, 110.0);
     assert!(d_px(&inside).is_some_and(|d| d > 0.0), "{inside:?}");
 }
+
+/// A view's compass 4 degrees off its fitted heading and bias costs a
+/// quarter as much about a far pivot (the hard world's 116 mm lever:
+/// 5 degrees a sigma, `config::refine::VIEW_MIX_FAR`) as about the
+/// lab's (66 mm: the compass's 2.5): the compass moved farther between
+/// the views.
+#[test]
+fn a_far_pivot_trusts_a_view_compass_less() {
+    let miss = i64::from(Angle::from_degrees_f64(4.0).0);
+    let cost = |lever_mm: f64| {
+        let row = rows::mixed(miss, rows::view_prior(Length::from_mm_f64(lever_mm).0.into()), &[HEADING, BIAS], -1);
+        let r = f64::from(row.r) / ONE_SIGMA as f64;
+        (r * r, row.loss)
+    };
+    let ((near, near_loss), (far, far_loss)) = (cost(66.0), cost(116.0));
+    assert!((near - 2.56).abs() < 0.05 && (far - 0.64).abs() < 0.05, "{near} {far}");
+    // both within the narrow part: no wide part's constant
+    assert_eq!((near_loss, far_loss), (Loss::Square(0), Loss::Square(0)));
+}
