@@ -404,9 +404,6 @@ impl Model<'_> {
     }
 }
 
-/// A max-mixture prior's row for `miss` (angle LSB) in the parameters
-/// `cols`, each moving it by `sign` mrad a unit: the part that explains
-/// it better.
 /// A view's compass prior with the lever at `lever` (Q16 mm): the
 /// compass moves farther between views about a far pivot
 /// ([`cfg::VIEW_MIX_FAR`]).
@@ -418,6 +415,9 @@ pub(super) fn view_prior(lever: i64) -> Mixture {
     }
 }
 
+/// A max-mixture prior's row for `miss` (angle LSB) in the parameters
+/// `cols`, each moving it by `sign` mrad a unit: the part that explains
+/// it better.
 pub(super) fn mixed(miss: i64, m: Mixture, cols: &[usize], sign: i64) -> Row {
     let narrow = mul_shr(miss, m.narrow, 28);
     let wide = mul_shr(miss, m.wide, 28);
