@@ -78,7 +78,13 @@ impl Survey {
     /// The next turn ([`Survey::way`]), or the search of the views there
     /// are when neither way has room.
     pub(super) fn turn(&mut self) -> Action {
-        let Some((clockwise, ahead)) = self.way() else {
+        self.turn_to(self.way())
+    }
+
+    /// The next turn, the way [`Survey::way`] found: or the search of the
+    /// views there are when it found none.
+    pub(super) fn turn_to(&mut self, way: Option<(bool, Ahead)>) -> Action {
+        let Some((clockwise, ahead)) = way else {
             self.room.cut_short = true;
             return self.search();
         };

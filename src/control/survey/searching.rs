@@ -142,7 +142,8 @@ impl Survey {
         let settles = |fix: &Fix| !fix.ambiguous && position_steerable(fix.sigma_x, fix.sigma_y, 1);
         // another view is wanted and neither way has room to turn: these
         // views are all there will be (a search of them again finds the same)
-        if !matches!(&result, Ok(fix) if settles(fix)) && self.way().is_none() {
+        let way = self.way();
+        if !matches!(&result, Ok(fix) if settles(fix)) && way.is_none() {
             self.room.cut_short = true;
         }
         let last_view = self.count >= MAX_VIEWS || self.room.cut_short;
@@ -163,7 +164,7 @@ impl Survey {
                 self.search()
             }
             Err(e) if last_view => Action::Done(Err(e)),
-            _ => self.turn(),
+            _ => self.turn_to(way),
         }
     }
 
