@@ -164,8 +164,10 @@ pub const REFINE_VIEWS: usize = 5;
 /// repeats searched; at 5 degrees 978 (a twist of 6.6 degrees repeated),
 /// at 15 and 20 978 (a blocked turn of 14 degrees whose two views each
 /// helped). On the two held-out sets of 1,000 it changes nothing (953 and
-/// 967 right, against 954 and 966): the three starts it mends are the
-/// tuned set's, and it stands for the reason above, not a measured gain.
+/// 967 right, against 954 and 966): the three starts it mended are the
+/// tuned set's (two of them, 96 and 973, are heading misses since
+/// [`VIEW_MIX_FAR`]), and it stands for the reason above, not a measured
+/// gain.
 pub const REPEAT_DEG: f64 = 4.0 * estimator::COMPASS_SIGMA_DEG;
 /// When a search of those views finds nothing (their compass errors
 /// differ by more than it allows, `config::locate::TURN_TOLERANCE_MM`),
