@@ -144,14 +144,6 @@ fn between(turns: &[Turn], count: usize) -> &[Turn] {
     turns.get(..count.saturating_sub(1)).unwrap_or(turns)
 }
 
-/// Of `views` and the `turns` between them, those the refinement weighs:
-/// the last [`config::refine::REFINE_VIEWS`] views and the turns between
-/// those.
-fn weighed<'a>(views: &'a [Readings], turns: &'a [Turn]) -> (&'a [Readings], &'a [Turn]) {
-    let first = views.len().saturating_sub(config::refine::REFINE_VIEWS);
-    (views.get(first..).unwrap_or(views), turns.get(first..).unwrap_or(&[]))
-}
-
 /// The procedure (see the module docs).
 #[derive(Clone, Debug)]
 pub struct Survey {
@@ -400,7 +392,7 @@ impl Survey {
             }
             Phase::Refine(refine) => {
                 // (the fields, not `views()` and `turns()`: the phase is borrowed)
-                let (views, turns) = weighed(taken(&self.views, self.count), between(&self.turns, self.count));
+                let (views, turns) = (taken(&self.views, self.count), between(&self.turns, self.count));
                 match refine.step(arena, views, turns) {
                     None => Action::Stand,
                     Some(result) => {

@@ -173,8 +173,7 @@ impl Survey {
     /// the search's calls (`cargo fw-image`'s stack check).
     #[inline(never)]
     pub(super) fn refine(&mut self, fix: Fix) -> Action {
-        let (views, turns) = super::weighed(self.views(), self.turns());
-        self.phase = Phase::Refine(Refine::new(fix, views, turns));
+        self.phase = Phase::Refine(Refine::new(fix, self.views(), self.turns()));
         self.ticks = 0;
         Action::Stand
     }

@@ -2,7 +2,8 @@
 //! the views and the readings taken while turning between them
 //! ([`Turn`]), explained by one model of the survey (`rows.rs`: a pivot
 //! that stays put, a heading per view, each way's turn rate, the
-//! compass's bias common to the views give or take a little, the lidars'
+//! compass's bias and the floor's bend of it across the pivot's circle
+//! give or take a little a view, the lidars'
 //! noise growing with incidence and at corners), fitted by
 //! Levenberg-Marquardt (`solve.rs`) with a bounded loss per reading.
 //!
@@ -37,10 +38,10 @@ use crate::config::refine as cfg;
 use crate::config::timing::LOOP_HZ;
 use crate::math::{div_i64, sin_cos, Angle, Coord, Length};
 use crate::model::locate::turns::Turn;
-use crate::model::locate::{Fix, Readings, MAX_CLUSTERS, MAX_VIEWS};
+use crate::model::locate::{Fix, Readings, MAX_CLUSTERS};
 use crate::model::measurement::Arena;
 use crate::model::state::Pose;
-use rows::{param, Loss, Model, Params, BIAS, CCW, CW, HEADING, LEVER, MAX_PARAMS, ONE_SIGMA, PX, PY};
+use rows::{param, Loss, Model, Params, BIAS, CCW, CW, FIT_VIEWS, HEADING, LEVER, MAX_PARAMS, ONE_SIGMA, PX, PY};
 use solve::{Sums, DAMPING_MAX, DAMPING_MIN};
 
 /// Where in its spot a range is read from, held through a start.
@@ -183,8 +184,10 @@ pub struct Refine {
 
 impl Refine {
     /// The refinement of `fix`, found from `views` and `turns` (turn `j`
-    /// between views `j` and `j + 1`).
+    /// between views `j` and `j + 1`): it weighs the last
+    /// [`cfg::REFINE_VIEWS`] views and the turns between them.
     pub fn new(fix: Fix, views: &[Readings], turns: &[Turn]) -> Refine {
+        let (views, turns) = weighed(views, turns);
         Refine {
             fix,
             rates: compass_rates(views, turns),
@@ -221,7 +224,7 @@ impl Refine {
     /// (`None` inside when there were no views). `views` and `turns` must
     /// be the ones [`Refine::new`] had.
     pub fn step(&mut self, arena: &Arena, views: &[Readings], turns: &[Turn]) -> Option<Option<Refined>> {
-        let views = views.get(..MAX_VIEWS).unwrap_or(views);
+        let (views, turns) = weighed(views, turns);
         let starts = self.fix.clusters().len().min(MAX_CLUSTERS).saturating_mul(STARTS);
         if self.start >= starts || views.is_empty() {
             return Some(self.result());
@@ -455,6 +458,13 @@ impl Fit {
     }
 }
 
+/// Of `views` and the `turns` between them, those the refinement weighs:
+/// the last [`cfg::REFINE_VIEWS`] views and the turns between those.
+fn weighed<'a>(views: &'a [Readings], turns: &'a [Turn]) -> (&'a [Readings], &'a [Turn]) {
+    let first = views.len().saturating_sub(FIT_VIEWS);
+    (views.get(first..).unwrap_or(views), turns.get(first..).unwrap_or(&[]))
+}
+
 /// Q16 mm to whole mm, rounded, within `i16` (the box is a few hundred mm).
 fn whole_mm(v: i64) -> i16 {
     (v.saturating_add(1 << 15) >> 16).clamp(i64::from(i16::MIN), i64::from(i16::MAX)) as i16
@@ -465,7 +475,7 @@ fn whole_mm(v: i64) -> i16 {
 /// gets the survey's planned rate.
 fn compass_rates(views: &[Readings], turns: &[Turn]) -> (i64, i64) {
     const PLANNED: i64 = Angle::from_radians_f64(TURN_MRAD_S as f64 / 1000.0 / LOOP_HZ as f64).0 as i64;
-    let mut per_way = [[0i64; MAX_VIEWS]; 2];
+    let mut per_way = [[0i64; FIT_VIEWS]; 2];
     let mut counts = [0usize; 2];
     for (pair, t) in views.windows(2).zip(turns) {
         let (Some(a), Some(b)) = (pair.first(), pair.get(1)) else { continue };

@@ -7,7 +7,10 @@
 //! The body turns about a pivot `P` that stays put over the survey; the
 //! reference point sits at a lever `D` from it, at `P + D (cos t, sin t)`
 //! with `t` the heading. Each view has its own heading `t_i`; the compass
-//! reads `t_i + b`, a bias `b` common to the views give or take a little;
+//! reads `t_i + b + (D / 100 mm) (g_x cos t_i + g_y sin t_i)`: a bias `b`
+//! at the pivot, and a floor that bends the field, its bias changing by
+//! `g` every 100 mm the compass (at the reference point) moves from the
+//! pivot, give or take a little a view;
 //! each way's turns run at one rate (angle per tick); a turn's readings sit
 //! at headings between its two views', in proportion to its ticks.
 //!
@@ -20,23 +23,29 @@
 use super::Share;
 use crate::config::estimator as est;
 use crate::config::refine as cfg;
-use crate::math::{isqrt, mul_wide, quotient, sin_cos, Angle, Coord, Length};
+use crate::math::{div_i64, isqrt, mul_wide, quotient, sin_cos, Angle, Coord, Length};
 use crate::model::locate::turns::Turn;
-use crate::model::locate::{Readings, MAX_VIEWS};
+use crate::model::locate::Readings;
 use crate::model::measurement::{Arena, Beam, LidarId, Wall};
 use crate::model::state::Pose;
 
 /// The parameters' places: the pivot, the lever, the compass's bias, each
-/// way's turn a tick (both positive), then the views' headings.
+/// way's turn a tick (both positive), the field's bend along x and along y
+/// (the bias's change over [`FIELD_SPAN`]), then the views' headings.
 pub const PX: usize = 0;
 pub const PY: usize = 1;
 pub const LEVER: usize = 2;
 pub const BIAS: usize = 3;
 pub const CW: usize = 4;
 pub const CCW: usize = 5;
-pub const HEADING: usize = 6;
+pub const FIELD_X: usize = 6;
+pub const FIELD_Y: usize = 7;
+pub const HEADING: usize = 8;
+/// Views the model weighs at most (the refinement passes it the last
+/// ones).
+pub const FIT_VIEWS: usize = cfg::REFINE_VIEWS;
 /// Parameters at most.
-pub const MAX_PARAMS: usize = HEADING + MAX_VIEWS;
+pub const MAX_PARAMS: usize = HEADING + FIT_VIEWS;
 
 pub type Params = [i64; MAX_PARAMS];
 
@@ -101,9 +110,11 @@ const fn mixture((share, narrow, wide): (f64, f64, f64)) -> Mixture {
 
 const BIAS_PRIOR: Mixture = mixture(cfg::BIAS_MIX);
 const VIEW_PRIOR: Mixture = mixture(cfg::VIEW_MIX);
-const VIEW_PRIOR_FAR: Mixture = mixture(cfg::VIEW_MIX_FAR);
-const FAR_LEVER: i64 = Length::from_mm_f64(cfg::FAR_LEVER_MM).0 as i64;
 const TURN_INV: i64 = inv(deg(cfg::TURN_SIGMA_DEG));
+const FIELD_INV: i64 = inv(deg(cfg::FIELD_SIGMA_DEG));
+/// The distance the field's bend is the bias's change over
+/// ([`cfg::FIELD_SIGMA_DEG`]'s), Q16 mm.
+pub const FIELD_SPAN: i64 = 100 * MM;
 /// The lever's prior: the pivot anywhere the estimator allows
 /// (`PIVOT_MIN_MM` to `PIVOT_MAX_MM` behind the axle), its mean and a
 /// third of the range as one sigma.
@@ -126,6 +137,10 @@ const MIN_NORMAL: i32 =
     (crate::math::cos_f64(cfg::MAX_INCIDENCE_DEG * core::f64::consts::PI / 180.0) * Q30 as f64) as i32;
 const TAN2_MAX: i64 = 16 << 16;
 const Q30: i64 = 1 << 30;
+/// An angle LSB in rad, Q46 (an angle times it `>> 16` is Q30 rad).
+const RAD_Q30: i64 = (Q30 as f64 * 65536.0 / Angle::from_radians_f64(1.0).0 as f64) as i64;
+/// `2^46 / FIELD_SPAN`: a lever (Q16 mm) times it `>> 16` is Q30 spans.
+const PER_SPAN: i64 = (Q30 << 16) / FIELD_SPAN;
 /// 1/1000 in Q30: a derivative per rad to one per mrad.
 const PER_MRAD: i64 = Q30 / 1000;
 
@@ -230,7 +245,7 @@ pub struct Model<'a> {
 impl Model<'_> {
     /// Parameters in use: the views' headings after the common ones.
     pub fn params(&self) -> usize {
-        HEADING.saturating_add(self.views.len().min(MAX_VIEWS))
+        HEADING.saturating_add(self.views.len().min(FIT_VIEWS))
     }
 
     /// The rows at `p` from the `from`-th, `count` of them at most, in
@@ -241,7 +256,7 @@ impl Model<'_> {
         // a row is made only when its index is in the slice
         let mut slice = Slice { index: 0, from, end: from.saturating_add(count) };
         let get = |k: usize| param(p, k);
-        let views = self.views.get(..MAX_VIEWS).unwrap_or(self.views);
+        let views = self.views.get(..FIT_VIEWS).unwrap_or(self.views);
         for (i, v) in views.iter().enumerate() {
             let k = HEADING.saturating_add(i);
             let at = At { theta: get(k), from: (k, 1 << 16), to: (k, 0) };
@@ -253,9 +268,7 @@ impl Model<'_> {
                 }
             }
             if slice.take() {
-                let predicted = get(k).saturating_add(get(BIAS));
-                let miss = i64::from(v.heading.diff(Angle(predicted as u32)));
-                f(&mixed(miss, view_prior(get(LEVER)), &[k, BIAS], -1));
+                f(&self.compass(p, k, v.heading));
             }
         }
         for (j, t) in self.turns.iter().enumerate().take(views.len().saturating_sub(1)) {
@@ -290,6 +303,13 @@ impl Model<'_> {
             let bias = i64::from(Angle(get(BIAS) as u32).diff(Angle::ZERO));
             f(&mixed(bias, BIAS_PRIOR, &[BIAS], 1));
         }
+        // the field's bend, each way
+        for k in [FIELD_X, FIELD_Y] {
+            if slice.take() {
+                let d = mul_shr(MRAD, FIELD_INV, 28);
+                f(&Row::new(mul_shr(get(k), FIELD_INV, 28), Loss::Square(0)).with(k, d));
+            }
+        }
         if slice.take() {
             let lever = get(LEVER).saturating_sub(LEVER_MEAN);
             f(&Row::new(mul_shr(lever, LEVER_INV, 28), Loss::Square(0)).with(LEVER, mul_shr(MM, LEVER_INV, 28)));
@@ -319,6 +339,36 @@ impl Model<'_> {
             .with(col, per(MM))
             .with(LEVER, per(toward >> 14))
             .with(last, per(mul_shr(swing, PER_MRAD, 30)))
+    }
+
+    /// View `k`'s compass reading `read`: the view's heading, the bias at
+    /// the pivot, and the field's bend out to the reference point.
+    // out of line: inlined into the pass, the Xtensa backend could not
+    // spill a register in its frame (lx106/run.sh's build)
+    #[inline(never)]
+    fn compass(&self, p: &Params, k: usize, read: Angle) -> Row {
+        let get = |k: usize| param(p, k);
+        let (s, c) = sin_cos(Angle(get(k) as u32));
+        let (s, c) = (i64::from(s), i64::from(c));
+        let (gx, gy) = (get(FIELD_X), get(FIELD_Y));
+        // the lever in field spans (Q30), the bend along the heading and
+        // across it (angle LSB a span)
+        let spans = mul_shr(get(LEVER), PER_SPAN, 16);
+        let along = mul_shr(gx, c, 30).saturating_add(mul_shr(gy, s, 30));
+        let across = mul_shr(gy, c, 30).saturating_sub(mul_shr(gx, s, 30));
+        let field = mul_shr(along, spans, 30);
+        let predicted = get(k).saturating_add(get(BIAS)).saturating_add(field);
+        let miss = i64::from(read.diff(Angle(predicted as u32)));
+        let row = mixed(miss, VIEW_PRIOR, &[BIAS], -1);
+        // the row's derivative by the bias (Q12 sigmas a mrad); the others
+        // move the predicted reading by their share of a mrad
+        let per = row.cols().first().map_or(0, |&(_, d)| i64::from(d));
+        let turning = mul_shr(mul_shr(across, spans, 30), RAD_Q30, 16);
+        let per_mm = div_i64(per.saturating_mul(along), MRAD.saturating_mul(FIELD_SPAN / MM)).unwrap_or(0);
+        row.with(k, per.saturating_add(mul_shr(per, turning, 30)))
+            .with(FIELD_X, mul_shr(mul_shr(per, c, 30), spans, 30))
+            .with(FIELD_Y, mul_shr(mul_shr(per, s, 30), spans, 30))
+            .with(LEVER, per_mm)
     }
 
     /// A lidar's reading `z` with the body at heading `at`.
@@ -401,17 +451,6 @@ impl Model<'_> {
         // mm (a beam along the wall)
         let sigma = (isqrt(var.clamp(1, i64::from(u32::MAX)) as u32) << 8).max(1 << 12);
         quotient(1, u64::from(sigma), 40).min(i32::MAX as u64) as i64
-    }
-}
-
-/// A view's compass prior with the lever at `lever` (Q16 mm): the
-/// compass moves farther between views about a far pivot
-/// ([`cfg::VIEW_MIX_FAR`]).
-pub(super) fn view_prior(lever: i64) -> Mixture {
-    if lever > FAR_LEVER {
-        VIEW_PRIOR_FAR
-    } else {
-        VIEW_PRIOR
     }
 }
 
