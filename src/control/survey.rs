@@ -48,8 +48,9 @@
 //!    ([`crate::model::locate::refine`]; this and the searches:
 //!    `survey/searching.rs`).
 //!    A refined fit that explains the readings poorly
-//!    ([`crate::model::locate::refine::Refined::poor`])
-//!    rests on a wrong place: the search goes on at its next headings
+//!    ([`crate::model::locate::refine::Refined::poor`],
+//!    [`config::refine::SEARCH_ON_LIMIT`])
+//!    may rest on a wrong place: the search goes on at its next headings
 //!    ([`config::refine::SEARCH_ON_STEPS`], for at most
 //!    [`config::refine::SEARCH_ON_MS`] into the procedure), each place
 //!    found is refined, and the cheapest fit is reported (found again by

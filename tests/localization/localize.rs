@@ -205,25 +205,36 @@ fn print_bar(what: &str, right: usize, wrong: usize) {
 }
 
 /// A refined fit that explains the readings poorly (more than
-/// `config::refine::FIT_LIMIT` a reading) makes the survey search on at
-/// the next headings, and the cheapest fit is reported
+/// `config::refine::SEARCH_ON_LIMIT` a reading) makes the survey search on
+/// at the next headings, and the cheapest fit is reported
 /// (`config::refine::SEARCH_ON_STEPS`). Four hard power-ups of the 1,000
 /// (`the_robot_finds_itself_in_the_hard_world`) where the search's place at
 /// the compass's heading was wrong: each is located within 30 mm and 5
 /// degrees now; before, each was reported uncertain 110 to 400 mm off.
+/// And held-out set A's start 797, whose search's only place was 214 mm
+/// off, refined to 1.97 a reading and vouched for (under
+/// `config::refine::FIT_LIMIT`, which searching on took as its limit
+/// before): it was located 288 mm off and not flagged; searching on finds
+/// the true place, where the fit costs 1.42.
 #[test]
 fn a_poor_fit_makes_the_search_go_on() {
     power_ups_are_right(Realism::HARD, &[45, 112, 594, 629]);
+    power_ups_of_are_right(HELD_OUT[0], Realism::HARD, &[797]);
 }
 
 /// The power-ups `starts` of the 1,000 in `realism`'s world (the `TUNED`
 /// set's starts and seeds) are each located within 30 mm and 5 degrees,
 /// refined.
 fn power_ups_are_right(realism: Realism, starts: &[usize]) {
-    let mut rng = Rng::new(TUNED.starts_seed);
+    power_ups_of_are_right(TUNED, realism, starts);
+}
+
+/// [`power_ups_are_right`] for the power-ups of `set`.
+fn power_ups_of_are_right(set: Set, realism: Realism, starts: &[usize]) {
+    let mut rng = Rng::new(set.starts_seed);
     let poses: Vec<PoseF64> = (0..1_000).map(|_| random_pose_in_box(&mut rng)).collect();
     for &i in starts {
-        power_up(poses[i], TUNED.first_seed + i as u64, realism, true).assert_located_right(format_args!("start {i}"));
+        power_up(poses[i], set.first_seed + i as u64, realism, true).assert_located_right(format_args!("start {i}"));
     }
 }
 
@@ -275,10 +286,14 @@ fn a_view_a_blocked_turn_repeats_is_searched_once() {
 }
 
 /// Measured in the hard world, 1,000 power-ups with the fix refined: (right,
-/// wrong and not flagged): the tuned set (`TUNED`). Also 762 reported
+/// wrong and not flagged): the tuned set (`TUNED`). Also 821 reported
 /// ambiguous or uncertain (the search's flags kept, the refinement's
-/// added), 0 failed, 822 certain enough for goto a second later; time
-/// median 13.5 s, 95th percentile 36.4 s. (974 and 6, 814 steerable,
+/// added), 0 failed, 817 certain enough for goto a second later; time
+/// median 15.6 s, 95th percentile 73.1 s. (980 and 2, 762 flagged, 822
+/// steerable, 13.5 and 36.4 s, before a fit dearer than
+/// `config::refine::SEARCH_ON_LIMIT`, not `FIT_LIMIT`, made the search go
+/// on: the power-ups whose right fit costs more search on for a minute;
+/// 974 and 6, 814 steerable,
 /// 36.1 s, before the compass's bias bent across the pivot's circle,
 /// `config::refine::FIELD_SIGMA_DEG`, chosen by the held-out sets, in
 /// place of a far pivot's wider view prior; 979 and 1, 825 steerable,
@@ -314,11 +329,14 @@ fn a_view_a_blocked_turn_repeats_is_searched_once() {
 /// INCIDENCE_SPREAD`, `MAX_INCIDENCE_DEG`, `VIEW_MIX`; 823 and 18 before
 /// the survey asked its earlier views about the left, `control::survey::
 /// room::left_clear`.)
-const HARD_REFINED: (usize, usize) = (980, 2);
+const HARD_REFINED: (usize, usize) = (979, 1);
 
 /// Measured on the held-out sets (`HELD_OUT`), refined: (right, wrong and
-/// not flagged); also 3 and 1 failed (out of time), 767 and 755 flagged,
-/// time 95th percentile 38.2 and 32.7 s (959 / 5 and 974 / 3, 37.7 and
+/// not flagged); also 3 and 1 failed (out of time), 826 and 805 flagged,
+/// 815 and 817 steerable, time median 17.1 and 15.8 s, 95th percentile
+/// 75.3 and 74.1 s (966 / 5 and 977 / 2, 767 and 755 flagged, 38.2 and
+/// 32.7 s, before a fit dearer than `config::refine::SEARCH_ON_LIMIT`
+/// made the search go on; 959 / 5 and 974 / 3, 37.7 and
 /// 32.5 s, before the compass's bend, `config::refine::FIELD_SIGMA_DEG`,
 /// chosen on both; 954 / 7 and 967 / 3, 43.0 and 33.1 s, before a far
 /// pivot's wider view prior, chosen on set A and confirmed on B, since
@@ -330,16 +348,16 @@ const HARD_REFINED: (usize, usize) = (980, 2);
 /// constant of the survey and the refinement before the bend was kept or
 /// dropped by its count there (and its starts were the ones studied),
 /// and these sets measure what the same firmware does on power-ups
-/// little of it was chosen by: 96.6 and 97.7 % right, 0.5 and 0.2 % wrong
+/// little of it was chosen by: 97.1 and 98.2 % right, 0.2 and 0.1 % wrong
 /// and not flagged; two fresh sets never used to choose (starts seeds
-/// 3331 and 4447, runs' seeds from 13,000 and 17,000): 977 / 2 and 975 /
-/// 5. (Before the far pivot's wider view prior: the tuned set's
+/// 3331 and 4447, runs' seeds from 13,000 and 17,000): 979 / 1 and
+/// 980 / 1. (Before the far pivot's wider view prior: the tuned set's
 /// starts with the held-out seeds measured 973 and 974;
 /// `config::refine::REPEAT_DEG`'s repeats
 /// counted once: 953 and 967 against 954 and 966 without (the three
 /// starts it mends are the tuned set's).)
 /// Asserted: no worse than that.
-const HARD_HELD_OUT: [(usize, usize); 2] = [(966, 5), (977, 2)];
+const HARD_HELD_OUT: [(usize, usize); 2] = [(971, 2), (982, 1)];
 
 /// Measured in the hard world, 1,000 power-ups unrefined: (right, wrong
 /// and not flagged). Also: 788 reported ambiguous or uncertain, 8 failed

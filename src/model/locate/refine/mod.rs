@@ -77,6 +77,7 @@ const fn q24(v: f64) -> i64 {
 }
 const AWAY_MARGIN: i64 = q24(cfg::AWAY_MARGIN);
 const FIT_LIMIT: i64 = q24(cfg::FIT_LIMIT);
+const SEARCH_ON_LIMIT: i64 = q24(cfg::SEARCH_ON_LIMIT);
 const WELL_FIT: i32 = q24(cfg::WELL_FIT) as i32;
 const RIVAL_GAP: i64 = q24(cfg::RIVAL_GAP);
 const RIVAL_ANGLE: i32 = Angle::from_degrees_f64(cfg::RIVAL_DEG).0 as i32;
@@ -106,10 +107,10 @@ pub struct Refined {
 }
 
 impl Refined {
-    /// Its readings fit worse than [`cfg::FIT_LIMIT`] apiece: the search's
-    /// place is likely not the robot's ([`cfg::SEARCH_ON_STEPS`]).
+    /// Its readings fit worse than [`cfg::SEARCH_ON_LIMIT`] apiece: the
+    /// search's place may not be the robot's ([`cfg::SEARCH_ON_STEPS`]).
     pub fn poor(&self) -> bool {
-        self.per_reading > FIT_LIMIT
+        self.per_reading > SEARCH_ON_LIMIT
     }
 }
 
