@@ -27,8 +27,9 @@ pub const TURN_SIGMA_DEG: f64 = 1.5;
 /// of its two parts (a max-mixture: no logarithm on the robot; the
 /// reference's sum measured the same): the share of the narrow part, its
 /// sigma and the wide one's, degrees. The compass's bias at the pivot
-/// (the views' common part): the lab's compass (`estimator::COMPASS_SIGMA_DEG`) or a
-/// disturbed floor (the 12 degrees) ...
+/// (the views' common part): the lab's compass
+/// (`estimator::COMPASS_SIGMA_DEG`) or a disturbed floor (the 12
+/// degrees) ...
 pub const BIAS_MIX: (f64, f64, f64) = (0.7, estimator::COMPASS_SIGMA_DEG, 12.0);
 /// ... and each view's apart from it and the floor's bend
 /// ([`FIELD_SIGMA_DEG`]): the compass's own spread at a
@@ -40,9 +41,10 @@ pub const BIAS_MIX: (f64, f64, f64) = (0.7, estimator::COMPASS_SIGMA_DEG, 12.0);
 /// with `INCIDENCE_SPREAD`, `MAX_INCIDENCE_DEG` and, in that earlier
 /// combination, a view's median taken as less noisy): 888 right, against
 /// 870 with the narrow part at 1.5 degrees and the wide at 6, as before;
-/// the wide part at 20 or the shares even, 883 to 887. With the bend
-/// (held-out sets A and B, in its trial): 967 / 5 and 976 / 2 as it is, the same with
-/// the wide part at 6, 962 / 7 and 980 / 3 with the narrow at 1.5.
+/// the wide part at 20 or the shares even, 883 to 887. With the floor's
+/// bend (held-out sets A and B, when it was tried): 967 / 5 and 976 / 2
+/// as it is, the same with the wide part at 6, 962 / 7 and 980 / 3 with
+/// the narrow part at 1.5.
 pub const VIEW_MIX: (f64, f64, f64) = (0.7, estimator::COMPASS_SIGMA_DEG, 12.0);
 /// The floor bends the field the compass reads, so its bias changes
 /// with the place: the fit's compass is read at the reference point, which

@@ -97,7 +97,7 @@ const fn deg(d: f64) -> f64 {
 /// and what the wide part costs over the narrow one at zero (Q24), twice
 /// `ln((wide / narrow) (share / (1 - share)))`.
 #[derive(Clone, Copy)]
-pub(super) struct Mixture {
+struct Mixture {
     narrow: i64,
     wide: i64,
     extra: i64,
@@ -457,7 +457,7 @@ impl Model<'_> {
 /// A max-mixture prior's row for `miss` (angle LSB) in the parameters
 /// `cols`, each moving it by `sign` mrad a unit: the part that explains
 /// it better.
-pub(super) fn mixed(miss: i64, m: Mixture, cols: &[usize], sign: i64) -> Row {
+fn mixed(miss: i64, m: Mixture, cols: &[usize], sign: i64) -> Row {
     let narrow = mul_shr(miss, m.narrow, 28);
     let wide = mul_shr(miss, m.wide, 28);
     let (r, inv, extra) = if narrow.saturating_mul(narrow) <= wide.saturating_mul(wide).saturating_add(m.extra) {
