@@ -22,8 +22,10 @@
 //! seeds (the bars are the 20 from seed 1).
 //!
 //! Measured (lab world): see `lab_world_laps_keep_their_figures`; the hard
-//! world, the power-up fix refined (the default): median rms 12.0 mm, the
-//! worst run 14.9 (14.2 and 44.2 unrefined; seeds 21-220: 12.5 and 65.6, 2
+//! world, the power-up fix refined (the default): median rms 12.2 mm, the
+//! worst run 14.8 (12.9 and 16.4 before the compass's bend and the
+//! survey's search-on limit, `config::refine::FIELD_SIGMA_DEG` and
+//! `SEARCH_ON_LIMIT`; 14.2 and 44.2 unrefined; seeds 21-220: 12.5 and 65.6, 2
 //! runs touching a wall); docs/simulator.md. Before the refinement and the
 //! corner's variance: median rms 13.3 mm, the worst run 33.9 mm,
 //! every run located, no collision, the invariants kept, since a `goto`
