@@ -5,7 +5,7 @@
 //! compass's bias and the floor's bend of it across the pivot's circle
 //! give or take a little a view, the lidars'
 //! noise growing with incidence and at corners), fitted by
-//! Levenberg-Marquardt (`solve.rs`) with a bounded loss per reading.
+//! Levenberg-Marquardt (`fit.rs`, `solve.rs`) with a bounded loss per reading.
 //!
 //! Why: the search scores each view at its compass heading, and a
 //! disturbed compass (the hard world's 12 to 20 degrees, 5 to 8 more
@@ -28,6 +28,7 @@
 //! readings (a `Beam` each) per call, so the loop spreads the fit over
 //! its ticks.
 
+mod fit;
 mod rows;
 mod solve;
 #[cfg(test)]
@@ -41,8 +42,8 @@ use crate::model::locate::turns::Turn;
 use crate::model::locate::{Fix, Readings, MAX_CLUSTERS};
 use crate::model::measurement::Arena;
 use crate::model::state::Pose;
-use rows::{param, Loss, Model, Params, BIAS, CCW, CW, FIT_VIEWS, HEADING, LEVER, MAX_PARAMS, ONE_SIGMA, PX, PY};
-use solve::{Sums, DAMPING_MAX, DAMPING_MIN};
+use fit::Fit;
+use rows::{Model, Params, BIAS, CCW, CW, FIT_VIEWS, HEADING, LEVER, MAX_PARAMS, ONE_SIGMA, PX, PY};
 
 /// Where in its spot a range is read from, held through a start.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
@@ -81,9 +82,6 @@ const SEARCH_ON_LIMIT: i64 = q24(cfg::SEARCH_ON_LIMIT);
 const WELL_FIT: i32 = q24(cfg::WELL_FIT) as i32;
 const RIVAL_GAP: i64 = q24(cfg::RIVAL_GAP);
 const RIVAL_ANGLE: i32 = Angle::from_degrees_f64(cfg::RIVAL_DEG).0 as i32;
-/// A step that lowers the cost by less than this ends the start (Q24: a
-/// thousandth of a sigma squared).
-const CONVERGED: i64 = q24(0.5);
 /// A turn the compass shows shorter than this was blocked: no rate from it.
 const BLOCKED: i64 = Angle::from_degrees_f64(BLOCKED_TURN_DEG as f64).0 as i64;
 const NEAR_INV: i64 = ((1u64 << 40) as f64 / (cfg::NEAR_SIGMA_MM * 65536.0)) as i64;
@@ -131,36 +129,6 @@ impl End {
         dx.saturating_mul(dx).saturating_add(dy.saturating_mul(dy)) > far.saturating_mul(far)
             || self.theta.diff(o.theta).saturating_abs() > RIVAL_ANGLE
     }
-}
-
-/// What a start's fit is summing over the readings.
-#[derive(Clone, Copy, PartialEq, Eq, Debug)]
-enum Stage {
-    /// The start's cost.
-    Start,
-    /// The normal equations at the parameters.
-    Normal,
-    /// The cost of the step tried.
-    Trial,
-}
-
-/// One start's fit under way.
-#[derive(Clone, Copy, Debug)]
-struct Fit {
-    p: Params,
-    cost: i64,
-    readings: u32,
-    /// The step tried (from `sums`, at `p`).
-    trial: Params,
-    stage: Stage,
-    /// The pass under way: its next row, and its sums so far.
-    row: u16,
-    pass_cost: i64,
-    pass_readings: u32,
-    sums: Sums,
-    damping: i8,
-    iterations: u8,
-    tries: u8,
 }
 
 /// The refinement, a slice of a pass over the readings at a time (see
@@ -351,124 +319,11 @@ const START_TURNS: [i32; cfg::START_HEADINGS_DEG.len()] = {
     t
 };
 
-impl Fit {
-    fn new(p: Params) -> Fit {
-        Fit {
-            p,
-            cost: i64::MAX,
-            readings: 0,
-            trial: p,
-            stage: Stage::Start,
-            row: 0,
-            pass_cost: 0,
-            pass_readings: 0,
-            sums: Sums::ZERO,
-            damping: -10,
-            iterations: 0,
-            tries: 0,
-        }
-    }
-
-    /// The pass's next rows: true when it is done.
-    fn pass(&mut self, model: &Model) -> bool {
-        let at = if self.stage == Stage::Trial { &self.trial } else { &self.p };
-        let normal = self.stage == Stage::Normal;
-        let (cost, readings, sums) = (&mut self.pass_cost, &mut self.pass_readings, &mut self.sums);
-        let done = model.rows(at, normal, usize::from(self.row), cfg::ROWS_PER_STEP, |row| {
-            if normal {
-                sums.add(row);
-            } else {
-                *cost = cost.saturating_add(solve::cost(row));
-                *readings = readings.saturating_add(u32::from(row.loss == Loss::Robust));
-            }
-        });
-        self.row = self.row.saturating_add(cfg::ROWS_PER_STEP as u16);
-        done
-    }
-
-    /// A pass is done: the next one. True when the start has ended.
-    fn next(&mut self, params: usize) -> bool {
-        let (cost, readings) = (self.pass_cost, self.pass_readings);
-        (self.row, self.pass_cost, self.pass_readings) = (0, 0, 0);
-        match self.stage {
-            Stage::Start => {
-                (self.cost, self.readings) = (cost, readings);
-                self.begin_normal();
-                false
-            }
-            Stage::Normal => self.try_step(params),
-            Stage::Trial if cost < self.cost => {
-                let gain = self.cost.saturating_sub(cost);
-                (self.p, self.cost, self.readings, self.tries) = (self.trial, cost, readings, 0);
-                self.damping = self.damping.saturating_sub(2).max(DAMPING_MIN);
-                self.iterations = self.iterations.saturating_add(1);
-                if self.iterations >= cfg::MAX_ITERATIONS || gain < CONVERGED {
-                    return true;
-                }
-                self.begin_normal();
-                false
-            }
-            // the same normal equations, damped more
-            Stage::Trial => self.failed() || self.try_step(params),
-        }
-    }
-
-    fn begin_normal(&mut self) {
-        self.sums = Sums::ZERO;
-        self.stage = Stage::Normal;
-    }
-
-    /// A step from the normal equations: its cost's pass next. True when
-    /// no step can be tried any more.
-    fn try_step(&mut self, params: usize) -> bool {
-        loop {
-            if let Some(q) = self.sums.step(&self.p, params, self.damping) {
-                self.trial = q;
-                self.stage = Stage::Trial;
-                return false;
-            }
-            if self.failed() {
-                return true;
-            }
-        }
-    }
-
-    /// A failed try: more damping, or the start's end.
-    fn failed(&mut self) -> bool {
-        self.tries = self.tries.saturating_add(1);
-        self.damping = self.damping.saturating_add(3).min(DAMPING_MAX);
-        self.tries >= cfg::MAX_TRIES
-    }
-
-    /// Where it ended: the last view's pose and the cost with `margin`.
-    fn end(&self, views: usize, margin: i64) -> End {
-        let get = |k: usize| param(&self.p, k);
-        let theta = Angle(get(HEADING.saturating_add(views.saturating_sub(1))) as u32);
-        let (s, c) = sin_cos(theta);
-        let x = get(PX).saturating_add(get(LEVER).saturating_mul(i64::from(c)) >> 30);
-        let y = get(PY).saturating_add(get(LEVER).saturating_mul(i64::from(s)) >> 30);
-        let cost = self.cost.saturating_add(margin);
-        End {
-            cost,
-            per_reading: div_i64(cost, i64::from(self.readings.max(1))).unwrap_or(i64::MAX).min(i64::from(i32::MAX))
-                as i32,
-            x_mm: whole_mm(x),
-            y_mm: whole_mm(y),
-            theta,
-        }
-    }
-}
-
 /// Of `views` and the `turns` between them, those the refinement weighs:
 /// the last [`cfg::REFINE_VIEWS`] views and the turns between those.
 fn weighed<'a>(views: &'a [Readings], turns: &'a [Turn]) -> (&'a [Readings], &'a [Turn]) {
     let first = views.len().saturating_sub(FIT_VIEWS);
     (views.get(first..).unwrap_or(views), turns.get(first..).unwrap_or(&[]))
-}
-
-/// Q16 mm to whole mm, rounded, within `i16` (the box is a few hundred mm).
-fn whole_mm(v: i64) -> i16 {
-    (v.saturating_add(1 << 15) >> 16).clamp(i64::from(i16::MIN), i64::from(i16::MAX)) as i16
 }
 
 /// Each way's turn a tick from the compass (the median over the turns not
