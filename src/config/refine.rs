@@ -245,6 +245,6 @@ pub const MAX_TRIES: u8 = 6;
 /// `Beam` and its noise, about 5,000 lx106 instructions with its
 /// derivatives, so 32 take about a fifth of the 10 ms tick, and a pass's
 /// end (the step's solve) a little more: under the search's third
-/// (`lx106/BENCHMARKS.md`, "Refining the fix": 212,575 at worst, 26.6 %;
+/// (`lx106/BENCHMARKS.md`, "Refining the fix": 212,678 at worst, 26.6 %;
 /// with every start tried 233,459, 29.1 %).
 pub const ROWS_PER_STEP: usize = 32;

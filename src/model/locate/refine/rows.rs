@@ -306,13 +306,11 @@ impl Model<'_> {
         // the field's bend, each way
         for k in [FIELD_X, FIELD_Y] {
             if slice.take() {
-                let d = mul_shr(MRAD, FIELD_INV, 28);
-                f(&Row::new(mul_shr(get(k), FIELD_INV, 28), Loss::Square(0)).with(k, d));
+                f(&gaussian(k, get(k), FIELD_INV));
             }
         }
         if slice.take() {
-            let lever = get(LEVER).saturating_sub(LEVER_MEAN);
-            f(&Row::new(mul_shr(lever, LEVER_INV, 28), Loss::Square(0)).with(LEVER, mul_shr(MM, LEVER_INV, 28)));
+            f(&gaussian(LEVER, get(LEVER).saturating_sub(LEVER_MEAN), LEVER_INV));
         }
         let last = HEADING.saturating_add(views.len().saturating_sub(1));
         for on_x in [true, false] {
@@ -452,6 +450,12 @@ impl Model<'_> {
         let sigma = (isqrt(var.clamp(1, i64::from(u32::MAX)) as u32) << 8).max(1 << 12);
         quotient(1, u64::from(sigma), 40).min(i32::MAX as u64) as i64
     }
+}
+
+/// A Gaussian prior's row: parameter `k` off its mean by `miss` (its
+/// LSB), one sigma `2^40 / inv` LSB.
+fn gaussian(k: usize, miss: i64, inv: i64) -> Row {
+    Row::new(mul_shr(miss, inv, 28), Loss::Square(0)).with(k, mul_shr(unit(k), inv, 28))
 }
 
 /// A max-mixture prior's row for `miss` (angle LSB) in the parameters
