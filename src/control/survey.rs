@@ -10,7 +10,8 @@
 //!    Before the first, the body makes room to turn from the readings
 //!    of a view taken standing ([`room::positioning_mm`]): it backs up
 //!    from a wall ahead, or drives forward clear of one that may be right
-//!    behind, stands [`config::locate::SETTLE_MS`], and takes the first
+//!    behind (ended early by a front reading nearer than it aims for,
+//!    [`room::drive_ends`]), stands [`config::locate::SETTLE_MS`], and takes the first
 //!    view there (the views are then joined by turns in place only, as the
 //!    search assumes).
 //! 2. A turn in place of [`config::locate::TURN_DEG`], clockwise first, ended
@@ -332,6 +333,8 @@ impl Survey {
                     turn.push(id, tick, d);
                 }
             }
+            // a wall ahead nearer than the drive aims for: its ticks are up
+            Phase::Drive { forward: true, ref mut ticks } if id == LidarId::Front && room::drive_ends(d) => *ticks = 0,
             _ => {}
         }
     }

@@ -231,6 +231,20 @@ fn room_ahead_drives_forward_clear_of_a_wall_behind() {
     let (mm, ticks) = positioned(&mut s, 400, 300);
     assert_eq!(mm, reach_mm());
     assert_eq!(ticks, ticks_of(mm));
+    // a front reading nearer than the aim while driving ends the drive
+    // (one at the aim does not); backing up, the front reading is nearer
+    // anyway, and the drive goes on
+    for (forward_mm, front, ends) in [(400, aim() - 1, true), (400, aim(), false), (100, 20, false)] {
+        let mut s = Survey::new();
+        assert_eq!(view(&mut s, 0, Some(forward_mm), Some(300)), Action::Stand);
+        let forward = s.room().moved_mm > 0;
+        for _ in 0..3 {
+            assert_eq!(s.tick(&ARENA), Action::Drive { forward });
+        }
+        s.lidar(LidarId::Front, Length::from_mm(front));
+        let next = s.tick(&ARENA);
+        assert_eq!(next == Action::Stand, ends, "{forward_mm} mm, then {front} mm: {next:?}");
+    }
     // already at the aim: no drive, that view is the first
     let mut s = Survey::new();
     assert_eq!(view(&mut s, 0, Some(aim()), Some(300)), Action::Stand);
