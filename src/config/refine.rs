@@ -68,6 +68,18 @@ pub const VIEW_MIX: (f64, f64, f64) = (0.7, estimator::COMPASS_SIGMA_DEG, 12.0);
 /// together, A 956 / 8 (each view's compass then explains what the bend
 /// should).
 pub const FIELD_SIGMA_DEG: f64 = 2.5;
+/// Each turn's lever apart from the survey's (the pivot moves as the
+/// skid's grip changes: the lab's assumed 5 mm a turn,
+/// `sim::PIVOT_SPREAD_MM`), one sigma, mm: a parameter a turn
+/// (`model::locate::refine`'s rows.rs). Measured, refined power-ups
+/// (`tests/localization/localize.rs`; right / wrong and not flagged),
+/// against one pivot for every turn: held-out A 974 / 1 (971 / 2), B 984
+/// / 1 (982 / 1), fresh C 985 / 0 (979 / 1), D 982 / 0 (980 / 1), the
+/// tuned set 981 / 2 (979 / 1), the lab's 992 / 0 (991 / 1); at 3 mm A
+/// 970 / 2 and B 984 / 1, at 10 A 964 / 4 and B 983 / 1. (Before the
+/// drive that makes room ended at a wall ahead,
+/// `control::survey::room::drive_ends`, which took 2 to 5 from each.)
+pub const PIVOT_MOVE_SIGMA_MM: f64 = 5.0;
 /// A reading's spread off square grows with its range: its beam's spot
 /// spreads along the wall by about the range times the cone's width, so
 /// the range spreads by this share of itself per unit of `tan(incidence)`
@@ -171,8 +183,10 @@ pub const SEARCH_ON_MS: u32 = 60_000;
 pub const SEARCH_VIEWS: usize = super::locate::MIN_VIEWS;
 /// The refinement weighs the last this many views and the turns between
 /// them: the pivot moves from turn to turn (the lab's skid, assumed 5 mm
-/// a turn, `sim::PIVOT_SPREAD_MM`), which the refinement's one pivot does
-/// not model, so over seven turns the first views sit 10 to 13 mm off
+/// a turn, `sim::PIVOT_SPREAD_MM`), which the refinement's one pivot did
+/// not model when this was chosen (each turn's move,
+/// [`PIVOT_MOVE_SIGMA_MM`], came later: a view more is two parameters
+/// more, past the robot's stack, `cargo fw-image`), so over seven turns the first views sat 10 to 13 mm off
 /// it (the lab's world, start 919 of `tests/localization/localize.rs`:
 /// eight views refined 5 degrees off, and not flagged). Five views span
 /// four turns, 180 degrees, walls on every side. 1,000 power-ups each
@@ -242,9 +256,9 @@ pub const START_AXIS_SHARES: [bool; 2] = [false, true];
 pub const MAX_ITERATIONS: u8 = 30;
 pub const MAX_TRIES: u8 = 6;
 /// Rows of the fit (a reading, a prior) a loop tick sums: a reading is a
-/// `Beam` and its noise, about 5,000 lx106 instructions with its
-/// derivatives, so 32 take about a fifth of the 10 ms tick, and a pass's
-/// end (the step's solve) a little more: under the search's third
-/// (`lx106/BENCHMARKS.md`, "Refining the fix": 212,678 at worst, 26.6 %;
-/// with every start tried 233,459, 29.1 %).
-pub const ROWS_PER_STEP: usize = 32;
+/// `Beam` and its noise, about 7,000 lx106 instructions with its
+/// derivatives (each turn's move among them), so 24 take about a fifth
+/// of the 10 ms tick, and a pass's end (the step's solve) a little more:
+/// under the search's slice (`lx106/BENCHMARKS.md`, "Refining the fix":
+/// 237,736 at worst, 29.7 %; with 32 rows, 306,540, 38.3 %).
+pub const ROWS_PER_STEP: usize = 24;

@@ -114,8 +114,7 @@ impl Fit {
     /// no step can be tried any more.
     fn try_step(&mut self, params: usize) -> bool {
         loop {
-            if let Some(q) = self.sums.step(&self.p, params, self.damping) {
-                self.trial = q;
+            if self.sums.step(&self.p, params, self.damping, &mut self.trial) {
                 self.stage = Stage::Trial;
                 return false;
             }

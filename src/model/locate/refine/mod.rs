@@ -1,7 +1,7 @@
 //! The search's fix refined with every reading of the survey (issue #29):
 //! the views and the readings taken while turning between them
 //! ([`Turn`]), explained by one model of the survey (`rows.rs`: a pivot
-//! that stays put, a heading per view, each way's turn rate, the
+//! that moves a little each turn, a heading per view, each way's turn rate, the
 //! compass's bias and the floor's bend of it across the pivot's circle
 //! give or take a little a view, the lidars'
 //! noise growing with incidence and at corners), fitted by
@@ -240,16 +240,17 @@ impl Refine {
         let last = views.len().saturating_sub(1);
         let theta = i64::from(self.fix.pose.theta.0).saturating_add(i64::from(turned));
         let (s, c) = sin_cos(Angle(theta as u32));
-        p[PX] = at.0.saturating_sub(lever.saturating_mul(i64::from(c)) >> 30);
-        p[PY] = at.1.saturating_sub(lever.saturating_mul(i64::from(s)) >> 30);
-        p[LEVER] = lever;
-        p[BIAS] = i64::from(views.get(last).map_or(0, |v| v.heading.diff(Angle(theta as u32))));
-        (p[CW], p[CCW]) = self.rates;
+        // (a place, the lever and a rate are well within `i32`; an angle wraps)
+        p[PX] = at.0.saturating_sub(lever.saturating_mul(i64::from(c)) >> 30) as i32;
+        p[PY] = at.1.saturating_sub(lever.saturating_mul(i64::from(s)) >> 30) as i32;
+        p[LEVER] = lever as i32;
+        p[BIAS] = views.get(last).map_or(0, |v| v.heading.diff(Angle(theta as u32)));
+        (p[CW], p[CCW]) = (self.rates.0 as i32, self.rates.1 as i32);
         // the views' headings, back from the last by the compass's turns
         let mut t = theta;
         for i in (0..=last).rev() {
             if let Some(slot) = p.get_mut(HEADING.saturating_add(i)) {
-                *slot = t;
+                *slot = t as i32;
             }
             if let (Some(a), Some(b)) = (views.get(i.wrapping_sub(1)), views.get(i)) {
                 t = t.saturating_sub(i64::from(b.heading.diff(a.heading)));

@@ -4,9 +4,13 @@
 //! takes them, chained through the pivot and the lever).
 //!
 //! # The parameters ([`Params`])
-//! The body turns about a pivot `P` that stays put over the survey; the
-//! reference point sits at a lever `D` from it, at `P + D (cos t, sin t)`
-//! with `t` the heading. Each view has its own heading `t_i`; the compass
+//! The body turns about a pivot `P`; the reference point sits at a lever
+//! `D` from it, at `P + D (cos t, sin t)` with `t` the heading, at the
+//! last view. Each turn `j` (between views `j` and `j + 1`) swings it at a
+//! lever of its own, `D + e_j` (the pivot moves: the skid's grip), so a
+//! reading before the turn sits `e_j (u(t) - u(t_j+1))` from there, `u`
+//! the heading's unit vector (the moves' chords, [`Model::chords`]).
+//! Each view has its own heading `t_i`; the compass
 //! reads `t_i + b + (D / 100 mm) (g_x cos t_i + g_y sin t_i)`: a bias `b`
 //! at the pivot, and a floor that bends the field, its bias changing by
 //! `g` every 100 mm the compass (at the reference point) moves from the
@@ -15,8 +19,8 @@
 //! at headings between its two views', in proportion to its ticks.
 //!
 //! # Units
-//! A parameter is stored in its fixed-point LSB ([`unit`]: a position or
-//! the lever in Q16 mm, an angle in [`Angle`] LSB, a rate in angle LSB a
+//! A parameter is stored in its fixed-point LSB ([`unit`]: a position,
+//! the lever or a move in Q16 mm, an angle in [`Angle`] LSB, a rate in angle LSB a
 //! tick) and stepped in its unit (1 mm, 1 mrad, [`RATE_UNIT`]). A residual
 //! is Q12 sigmas, a row's derivatives Q12 sigmas a unit.
 
@@ -44,14 +48,20 @@ pub const HEADING: usize = 8;
 /// Views the model weighs at most (the refinement passes it the last
 /// ones).
 pub const FIT_VIEWS: usize = cfg::REFINE_VIEWS;
+/// Each turn's pivot move, after the views' headings: turn `j` (between
+/// views `j` and `j + 1`) pivots that much farther from the reference
+/// point than the lever.
+pub const MOVE: usize = HEADING + FIT_VIEWS;
 /// Parameters at most.
-pub const MAX_PARAMS: usize = HEADING + FIT_VIEWS;
+pub const MAX_PARAMS: usize = MOVE + FIT_VIEWS - 1;
 
-pub type Params = [i64; MAX_PARAMS];
+/// The parameters in their LSB, an angle's wrapping (`i32`: the fit's two
+/// sets of them are on the robot's stack, `cargo fw-image`).
+pub type Params = [i32; MAX_PARAMS];
 
 /// Parameter `k` of `p` (0 past the parameters).
 pub fn param(p: &Params, k: usize) -> i64 {
-    p.get(k).copied().unwrap_or(0)
+    p.get(k).map_or(0, |&v| i64::from(v))
 }
 
 /// One mrad in angle LSB.
@@ -64,7 +74,7 @@ const MM: i64 = 1 << 16;
 pub fn unit(k: usize) -> i64 {
     // (compares, not a `match`: LLVM made the match a table in .rodata,
     // the robot's DRAM, 24 bytes more in `cargo fw-image`)
-    if k <= LEVER {
+    if k <= LEVER || k >= MOVE {
         MM
     } else if k == CW || k == CCW {
         RATE_UNIT
@@ -112,6 +122,7 @@ const BIAS_PRIOR: Mixture = mixture(cfg::BIAS_MIX);
 const VIEW_PRIOR: Mixture = mixture(cfg::VIEW_MIX);
 const TURN_INV: i64 = inv(deg(cfg::TURN_SIGMA_DEG));
 const FIELD_INV: i64 = inv(deg(cfg::FIELD_SIGMA_DEG));
+const MOVE_INV: i64 = inv(cfg::PIVOT_MOVE_SIGMA_MM * 65536.0);
 /// The distance the field's bend is the bias's change over
 /// ([`cfg::FIELD_SIGMA_DEG`]'s), Q16 mm.
 pub const FIELD_SPAN: i64 = 100 * MM;
@@ -170,14 +181,14 @@ pub enum Loss {
 #[derive(Clone, Copy, Debug)]
 pub struct Row {
     pub r: i32,
-    cols: [(u8, i32); 5],
+    cols: [(u8, i32); 9],
     len: u8,
     pub loss: Loss,
 }
 
 impl Row {
     fn new(r: i64, loss: Loss) -> Row {
-        Row { r: clamp(r), cols: [(0, 0); 5], len: 0, loss }
+        Row { r: clamp(r), cols: [(0, 0); 9], len: 0, loss }
     }
 
     fn with(mut self, k: usize, d: i64) -> Row {
@@ -192,6 +203,22 @@ impl Row {
     pub fn cols(&self) -> &[(u8, i32)] {
         self.cols.get(..usize::from(self.len)).unwrap_or(&[])
     }
+}
+
+/// Each view's heading as a unit vector (cos, sin; Q30), once a call of
+/// [`Model::rows`].
+type Units = [(i32, i32); FIT_VIEWS];
+
+// out of line: inlined into the loop's tick, `sin_cos`'s quadrant became
+// a jump table `cargo fw-image`'s stack check could not follow
+#[inline(never)]
+fn headings(p: &Params) -> Units {
+    let mut units = [(0, 0); FIT_VIEWS];
+    for (i, u) in units.iter_mut().enumerate() {
+        let (s, c) = sin_cos(Angle(param(p, HEADING.saturating_add(i)) as u32));
+        *u = (c, s);
+    }
+    units
 }
 
 /// Within [`R_MAX`], as an `i32`.
@@ -230,6 +257,10 @@ struct At {
     theta: i64,
     from: (usize, i64),
     to: (usize, i64),
+    /// The turns whose whole chord the body still has ahead (from this
+    /// one on), and the turn under way (its chord from `theta` on).
+    ahead: usize,
+    turning: Option<usize>,
 }
 
 /// The survey's readings, and the start's fixed choices.
@@ -245,7 +276,12 @@ pub struct Model<'a> {
 impl Model<'_> {
     /// Parameters in use: the views' headings after the common ones.
     pub fn params(&self) -> usize {
-        HEADING.saturating_add(self.views.len().min(FIT_VIEWS))
+        let views = self.views.len().min(FIT_VIEWS);
+        if views > 1 {
+            MOVE.saturating_add(views - 1)
+        } else {
+            HEADING.saturating_add(views)
+        }
     }
 
     /// The rows at `p` from the `from`-th, `count` of them at most, in
@@ -257,13 +293,14 @@ impl Model<'_> {
         let mut slice = Slice { index: 0, from, end: from.saturating_add(count) };
         let get = |k: usize| param(p, k);
         let views = self.views.get(..FIT_VIEWS).unwrap_or(self.views);
+        let units = headings(p);
         for (i, v) in views.iter().enumerate() {
             let k = HEADING.saturating_add(i);
-            let at = At { theta: get(k), from: (k, 1 << 16), to: (k, 0) };
+            let at = At { theta: get(k), from: (k, 1 << 16), to: (k, 0), ahead: i, turning: None };
             for (id, z) in [(LidarId::Front, v.front), (LidarId::Right, v.right)] {
                 if let Some(z) = z {
                     if slice.take() {
-                        f(&self.lidar(p, at, id, z, derivatives));
+                        f(&self.lidar(p, &units, at, id, z, derivatives));
                     }
                 }
             }
@@ -273,7 +310,9 @@ impl Model<'_> {
         }
         for (j, t) in self.turns.iter().enumerate().take(views.len().saturating_sub(1)) {
             let (from, to) = (HEADING.saturating_add(j), HEADING.saturating_add(j).saturating_add(1));
-            let (a, b) = (get(from), get(to));
+            // the turn from `a` to `b`, the angle between them wrapped
+            let a = get(from);
+            let b = a.saturating_add(i64::from((get(to) as i32).wrapping_sub(get(from) as i32)));
             let ticks = i64::from(t.ticks);
             // a reading's share of the turn: its tick over the turn's, Q16
             let per_tick = quotient(1, u64::from(t.ticks.max(1)), 32);
@@ -292,8 +331,14 @@ impl Model<'_> {
                             let when = (u64::from(tick) << 16).saturating_sub(READING_AGE);
                             let done = (when.saturating_mul(per_tick) >> 32).min(1 << 16) as i64;
                             let theta = a.saturating_add(mul_shr(b.saturating_sub(a), done, 16));
-                            let at = At { theta, from: (from, (1 << 16) - done), to: (to, done) };
-                            f(&self.lidar(p, at, id, z, derivatives));
+                            let at = At {
+                                theta,
+                                from: (from, (1 << 16) - done),
+                                to: (to, done),
+                                ahead: j.saturating_add(1),
+                                turning: Some(j),
+                            };
+                            f(&self.lidar(p, &units, at, id, z, derivatives));
                         }
                     }
                 }
@@ -311,6 +356,12 @@ impl Model<'_> {
         }
         if slice.take() {
             f(&gaussian(LEVER, get(LEVER).saturating_sub(LEVER_MEAN), LEVER_INV));
+        }
+        for j in 0..views.len().saturating_sub(1) {
+            if slice.take() {
+                let k = MOVE.saturating_add(j);
+                f(&gaussian(k, get(k), MOVE_INV));
+            }
         }
         let last = HEADING.saturating_add(views.len().saturating_sub(1));
         for on_x in [true, false] {
@@ -370,14 +421,18 @@ impl Model<'_> {
     }
 
     /// A lidar's reading `z` with the body at heading `at`.
-    fn lidar(&self, p: &Params, at: At, id: LidarId, z: Length, derivatives: bool) -> Row {
+    fn lidar(&self, p: &Params, units: &Units, at: At, id: LidarId, z: Length, derivatives: bool) -> Row {
         let get = |k: usize| param(p, k);
         let theta = Angle(at.theta as u32);
         let (s, c) = sin_cos(theta);
         let (s, c) = (i64::from(s), i64::from(c));
         let d = get(LEVER);
-        let x = get(PX).saturating_add(mul_shr(d, c, 30));
-        let y = get(PY).saturating_add(mul_shr(d, s, 30));
+        let chords = self.chords(units, &at);
+        let (mx, my) = chords.iter().fold((0i64, 0i64), |(x, y), &(k, cx, cy)| {
+            (x.saturating_add(mul_shr(get(k), cx, 30)), y.saturating_add(mul_shr(get(k), cy, 30)))
+        });
+        let x = get(PX).saturating_add(mul_shr(d, c, 30)).saturating_add(mx);
+        let y = get(PY).saturating_add(mul_shr(d, s, 30)).saturating_add(my);
         let (lx, wy) = (i64::from(self.arena.length_x.0), i64::from(self.arena.width_y.0));
         if !(0..=lx).contains(&x) || !(0..=wy).contains(&y) {
             return Row::new(OUTSIDE, Loss::Robust);
@@ -419,14 +474,34 @@ impl Model<'_> {
         let per = |v: i64| mul_shr(v, inv, 28);
         let (px, py) = if on_x { (signed(MM), 0) } else { (0, signed(MM)) };
         let dt = per(per_mrad);
-        let row = Row::new(per(nu), Loss::Robust).with(PX, per(px)).with(PY, per(py));
+        let row = Row::new(per(nu), Loss::Robust);
+        let row = if on_x { row.with(PX, per(px)) } else { row.with(PY, per(py)) };
         let row = row.with(LEVER, per(signed(toward) >> 14));
         let row = row.with(at.from.0, mul_shr(dt, at.from.1, 16));
-        if at.to.1 != 0 {
-            row.with(at.to.0, mul_shr(dt, at.to.1, 16))
-        } else {
-            row
+        let row = if at.to.1 != 0 { row.with(at.to.0, mul_shr(dt, at.to.1, 16)) } else { row };
+        chords.iter().fold(row, |row, &(k, cx, cy)| row.with(k, per(signed(if on_x { cx } else { cy }) >> 14)))
+    }
+
+    /// How the pivot's moves shift the reference point at `at`: each turn
+    /// still ahead moves it by its move times its chord (the heading's
+    /// unit vector at the turn's start less the one at its end, Q30), the
+    /// turn under way by the chord from `at` on. (parameter, chord x,
+    /// chord y).
+    fn chords(&self, units: &Units, at: &At) -> heapless::Vec<(usize, i64, i64), { FIT_VIEWS - 1 }> {
+        let turns = self.views.len().min(FIT_VIEWS).saturating_sub(1);
+        let unit = |i: usize| units.get(i).map_or((0, 0), |&(c, s)| (i64::from(c), i64::from(s)));
+        let mut out = heapless::Vec::new();
+        let mut push = |k: usize, a: (i64, i64), b: (i64, i64)| {
+            let _ = out.push((MOVE.saturating_add(k), a.0.saturating_sub(b.0), a.1.saturating_sub(b.1)));
+        };
+        if let Some(j) = at.turning {
+            let (s, c) = sin_cos(Angle(at.theta as u32));
+            push(j, (i64::from(c), i64::from(s)), unit(j.saturating_add(1)));
         }
+        for k in at.ahead..turns {
+            push(k, unit(k), unit(k.saturating_add(1)));
+        }
+        out
     }
 
     /// `2^40 / sigma` of a reading `z` along its wall's normal (Q16 mm): the
