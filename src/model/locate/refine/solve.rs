@@ -110,7 +110,8 @@ impl Sums {
                 *shifts.get_mut(k)? = (bits.saturating_sub(24) >> 1) as i8;
             }
         }
-        let shift = |k: usize| shifts.get(k).map_or(0, |&s| i32::from(s));
+        // (an unused parameter's scale: none, its entries are all zero)
+        let shift = |k: usize| shifts.get(k).filter(|&&s| s != UNUSED).map_or(0, |&s| i32::from(s));
         let scale = |v: i64, s: i32| if s >= 0 { v >> s.min(63) } else { v << s.saturating_neg().min(24) };
         let lambda = |d: i64| if damping >= 0 { d << damping.unsigned_abs() } else { d >> damping.unsigned_abs() };
         // the lower triangle, packed by rows (`lower`): the stack's worst
