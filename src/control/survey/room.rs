@@ -95,9 +95,10 @@ fn aim_mm() -> i32 {
 /// A front reading `front` taken while driving forward before the first
 /// view ends the drive: the wall ahead is nearer than the aim. The view
 /// the drive was planned from read a wall met at a slant along the beam,
-/// where glancing readings scatter (the hard world's start 1 of the
-/// known-start laps read 285 mm with the wall 266 away, 63 degrees off
-/// square) and the wheels run their own distance.
+/// where glancing readings scatter (the hard world's known-start laps,
+/// seed 1, read 285 mm with the wall 266 away, 63 degrees off square) and
+/// the wheels run their own distance. The readings while driving are as
+/// glancing: a guard, not a guarantee.
 pub fn drive_ends(front: Length) -> bool {
     front.to_mm() < aim_mm()
 }
