@@ -427,7 +427,7 @@ impl Model<'_> {
         let (s, c) = sin_cos(theta);
         let (s, c) = (i64::from(s), i64::from(c));
         let d = get(LEVER);
-        let chords = self.chords(units, &at);
+        let chords = self.chords(units, &at, (c, s));
         let (mx, my) = chords.iter().fold((0i64, 0i64), |(x, y), &(k, cx, cy)| {
             (x.saturating_add(mul_shr(get(k), cx, 30)), y.saturating_add(mul_shr(get(k), cy, 30)))
         });
@@ -485,9 +485,15 @@ impl Model<'_> {
     /// How the pivot's moves shift the reference point at `at`: each turn
     /// still ahead moves it by its move times its chord (the heading's
     /// unit vector at the turn's start less the one at its end, Q30), the
-    /// turn under way by the chord from `at` on. (parameter, chord x,
-    /// chord y).
-    fn chords(&self, units: &Units, at: &At) -> heapless::Vec<(usize, i64, i64), { FIT_VIEWS - 1 }> {
+    /// turn under way by the chord from `at` on (`unit_at`: the heading's
+    /// unit vector at `at`, cos and sin, Q30). (parameter, chord x, chord
+    /// y).
+    fn chords(
+        &self,
+        units: &Units,
+        at: &At,
+        unit_at: (i64, i64),
+    ) -> heapless::Vec<(usize, i64, i64), { FIT_VIEWS - 1 }> {
         let turns = self.views.len().min(FIT_VIEWS).saturating_sub(1);
         let unit = |i: usize| units.get(i).map_or((0, 0), |&(c, s)| (i64::from(c), i64::from(s)));
         let mut out = heapless::Vec::new();
@@ -495,8 +501,7 @@ impl Model<'_> {
             let _ = out.push((MOVE.saturating_add(k), a.0.saturating_sub(b.0), a.1.saturating_sub(b.1)));
         };
         if let Some(j) = at.turning {
-            let (s, c) = sin_cos(Angle(at.theta as u32));
-            push(j, (i64::from(c), i64::from(s)), unit(j.saturating_add(1)));
+            push(j, unit_at, unit(j.saturating_add(1)));
         }
         for k in at.ahead..turns {
             push(k, unit(k), unit(k.saturating_add(1)));
