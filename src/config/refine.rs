@@ -260,5 +260,5 @@ pub const MAX_TRIES: u8 = 6;
 /// derivatives (each turn's move among them), so 24 take about a fifth
 /// of the 10 ms tick, and a pass's end (the step's solve) a little more:
 /// under the search's slice (`lx106/BENCHMARKS.md`, "Refining the fix":
-/// 237,020 at worst, 29.6 %; with 32 rows, 306,540, 38.3 %).
+/// 235,721 at worst, 29.4 %; with 32 rows, 306,540, 38.3 %).
 pub const ROWS_PER_STEP: usize = 24;

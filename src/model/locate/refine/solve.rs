@@ -41,15 +41,11 @@ pub fn cost(row: &Row) -> i64 {
     }
 }
 
-/// The upper triangle's entries.
+/// A symmetric matrix's entries, its lower triangle packed by rows
+/// ([`lower`]).
 pub(super) const TRIANGLE: usize = MAX_PARAMS * (MAX_PARAMS + 1) / 2;
 
-/// Where row `k`'s entries start in the triangle (`k <= l` at `k`'s + `l - k`).
-const fn entry(k: usize, l: usize) -> usize {
-    k * (2 * MAX_PARAMS - k + 1) / 2 + (l - k)
-}
-
-/// The reweighted normal equations' sums, `A` (its upper triangle) and `g`,
+/// The reweighted normal equations' sums, `A` (its lower triangle) and `g`,
 /// Q20 (a product of two Q12 derivatives over 16: a reading's derivative
 /// is at most a few sigmas a unit, so the sums of a few hundred rows stay
 /// within `i32`).
@@ -75,7 +71,7 @@ impl Sums {
             for &(l, jl) in row.cols() {
                 let l = usize::from(l);
                 if k <= l && l < MAX_PARAMS {
-                    if let Some(a) = self.a.get_mut(entry(k, l)) {
+                    if let Some(a) = self.a.get_mut(lower(l, k)) {
                         *a = a.saturating_add((mul_wide(wj, jl) >> 4) as i32);
                     }
                 }
@@ -88,7 +84,7 @@ impl Sums {
         if l >= MAX_PARAMS {
             return 0;
         }
-        self.a.get(entry(k, l)).map_or(0, |&v| i64::from(v) << 4)
+        self.a.get(lower(l, k)).map_or(0, |&v| i64::from(v) << 4)
     }
 
     /// The step `p + delta` for the damping `2^damping`, into `q`: `(A +
