@@ -400,9 +400,8 @@ const HARD_REFINED: (usize, usize) = (979, 2);
 /// dropped by its count there (and its starts were the ones studied),
 /// and these sets measure what the same firmware does on power-ups
 /// little of it was chosen by: 97.0 and 98.1 % right, 0.2 and 0.1 % wrong
-/// and not flagged; two fresh sets never used to choose (starts seeds
-/// 3331 and 4447, runs' seeds from 13,000 and 17,000): 980 / 1 and
-/// 978 / 0. (Before the far pivot's wider view prior: the tuned set's
+/// and not flagged; the two fresh sets never used to choose: `FRESH`,
+/// `HARD_FRESH`. (Before the far pivot's wider view prior: the tuned set's
 /// starts with the held-out seeds measured 973 and 974;
 /// `config::refine::REPEAT_DEG`'s repeats
 /// counted once: 953 and 967 against 954 and 966 without (the three
