@@ -141,11 +141,14 @@ pub const BLOCKED_TURN_DEG: i32 = 20;
 /// columns: a column where many points explain the first view scores
 /// each of them once per pivot and later view.
 pub const SCORES_PER_TICK: u32 = 170;
-/// The whole procedure's time limit, ms: eight views (5 s) and two
-/// searches that try every heading (50 passes, 39 s each): a search that
-/// finds nothing takes another view and searches again. (60 s, room for
-/// one such search, left 18 of 1,000 hard power-ups out of time, 9 at
-/// this limit: `tests/localization/localize.rs`.)
+/// Each look's time limit, ms (the procedure's, and a second look's
+/// from its start, `config::refine::SECOND_LOOK_FIT`): eight views (5 s)
+/// and two searches that try every heading (50 passes, 39 s each): a
+/// search that finds nothing takes another view and searches again. (60
+/// s, room for one such search, left 18 of 1,000 hard power-ups out of
+/// time, 9 at this limit: `tests/localization/localize.rs`. One limit
+/// for both looks cut short the second looks that began late: set A of
+/// docs/simulator.md 8 out of time, 973 right against 980.)
 pub const TIME_LIMIT_MS: u32 = 120_000;
 /// The survey's turns in place are planned to pivot this far behind the
 /// reference point, mm: `goto`'s planned centre (`goto::TURN_CENTRE_

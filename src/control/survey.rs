@@ -57,6 +57,13 @@
 //!    found is refined, and the cheapest fit is reported (found again by
 //!    the search from its heading: the survey keeps its heading try and
 //!    cost, not the fix).
+//! 5. A refined answer that still fits poorly
+//!    ([`config::refine::SECOND_LOOK_FIT`]: the refinement cannot vouch
+//!    for any place) is not reported on the first look: the procedure
+//!    looks again from elsewhere ([`Action::LookAgain`]), from step 1 with
+//!    its drive to make room, and the second look's answer is the
+//!    answer, whatever it fits (the first's place is behind the body by
+//!    then).
 //!
 //! `tests/localization/locate.rs` measures this survey on the realistic simulator's
 //! sensors (99.1 % right from random starts, the lab's world); `tests/localization/localize.rs` runs it
@@ -180,6 +187,9 @@ pub struct Survey {
     /// a search of the last [`config::refine::SEARCH_VIEWS`] found nothing
     /// (for the rest of the procedure).
     few: bool,
+    /// This is the procedure's second look, from elsewhere: the first
+    /// answered with a poor fit ([`config::refine::SECOND_LOOK_FIT`]).
+    second_look: bool,
 }
 
 impl Default for Survey {
@@ -228,6 +238,7 @@ impl Survey {
             cheapest: None,
             elapsed: 0,
             few: false,
+            second_look: false,
         }
     }
 
@@ -258,6 +269,7 @@ impl Survey {
             cheapest,
             elapsed,
             few,
+            second_look,
         } = self;
         // (the views past `count` are not read)
         *count = 0;
@@ -273,6 +285,14 @@ impl Survey {
         *cheapest = None;
         *elapsed = 0;
         *few = false;
+        *second_look = false;
+    }
+
+    /// A second look from elsewhere: the procedure begun again, its drive
+    /// to make room first, with its time (the controller's) running on.
+    fn look_again(&mut self) {
+        self.restart();
+        self.second_look = true;
     }
 
     /// The answer when the procedure's time ran out: the fix refined as

@@ -12,7 +12,7 @@ pub enum Failure {
     NoRange,
     /// No pose in the box explains the views (an obstacle, another box).
     NothingFits,
-    /// [`crate::config::locate::TIME_LIMIT_MS`] ran out.
+    /// A look's time limit ran out ([`crate::config::locate::TIME_LIMIT_MS`]).
     OutOfTime,
     /// A command came (it runs instead).
     Interrupted,
@@ -53,5 +53,8 @@ pub enum Action {
     Drive {
         forward: bool,
     },
+    /// The answer fit poorly: the procedure looks again from elsewhere,
+    /// with a time limit of its own (the body stands this tick).
+    LookAgain,
     Done(Result<Fix, Failure>),
 }

@@ -64,6 +64,8 @@ fn unrepeated(views: &[Readings]) -> impl Iterator<Item = Readings> + '_ {
 /// procedure's ticks it may go on until.
 const LAST_TRY_ON: u8 = config::refine::SEARCH_ON_STEPS.saturating_mul(2);
 const SEARCH_ON_TICKS: u32 = ticks(config::refine::SEARCH_ON_MS);
+/// [`config::refine::SECOND_LOOK_FIT`], Q24 (as [`Cheapest::per_reading`]).
+const SECOND_LOOK_FIT: i64 = (config::refine::SECOND_LOOK_FIT * (1u32 << 24) as f64) as i64;
 
 impl Survey {
     /// The views the search reads: all of them without the refinement;
@@ -203,7 +205,7 @@ impl Survey {
         };
         let cheapest = match self.cheapest {
             // the cheapest, found again to be reported
-            Some(c) if c.again => return Action::Done(Ok(fix)),
+            Some(c) if c.again => return self.answer(fix),
             Some(c) if c.per_reading <= found.per_reading => c,
             _ => found,
         };
@@ -239,8 +241,20 @@ impl Survey {
                 self.cheapest = Some(Cheapest { again: true, ..c });
                 self.search_on(c.heading_try)
             }
-            _ => Action::Done(Ok(fix)),
+            _ => self.answer(fix),
         }
+    }
+
+    /// The refined answer `fix` (the cheapest fit): reported, or, when it
+    /// fits poorly ([`config::refine::SECOND_LOOK_FIT`]) on the first
+    /// look, a second look from elsewhere instead (see the module docs).
+    fn answer(&mut self, fix: Fix) -> Action {
+        let poor = self.cheapest.is_some_and(|c| c.per_reading > SECOND_LOOK_FIT);
+        if poor && !self.second_look {
+            self.look_again();
+            return Action::LookAgain;
+        }
+        Action::Done(Ok(fix))
     }
 }
 
@@ -299,6 +313,44 @@ mod tests {
             assert_eq!(s.room().cut_short, front == 30);
             assert_eq!(matches!(s.phase, Phase::Turn), front == 600);
         }
+    }
+
+    /// A first look whose answer fits poorly (more than
+    /// `SECOND_LOOK_FIT` a reading) is not the answer: the procedure
+    /// begins again, its drive to make room first, and says so; the second
+    /// look's answer is the answer however it fits, and a first look that
+    /// fits is the answer at once. A new procedure may look twice again.
+    #[test]
+    fn a_poor_fit_looks_again_from_elsewhere_once() {
+        use crate::model::locate::locate;
+        use crate::model::measurement::{expected_lidar, Arena, LidarId};
+        use crate::model::Pose;
+        let arena = Arena::DEFAULT;
+        let views: Vec<Readings> = [10.0, 55.0, 100.0, 145.0]
+            .map(|deg| {
+                let pose = Pose::from_mm(380, 240, Angle::from_degrees_f64(deg));
+                let read = |id| expected_lidar(&arena, &pose, id);
+                Readings { heading: pose.theta, front: read(LidarId::Front), right: read(LidarId::Right) }
+            })
+            .to_vec();
+        let fix = locate(&arena, &views).expect("exact views fit");
+        let costing = |per_reading: f64| {
+            let per_reading = (per_reading * f64::from(1u32 << 24)) as i64;
+            Some(Cheapest { heading_try: fix.heading_try(), per_reading, again: false })
+        };
+        let poor = config::refine::SECOND_LOOK_FIT + 0.1;
+        let mut s = surveyed(&[10.0, 55.0, 100.0, 145.0]);
+        s.cheapest = costing(poor);
+        assert_eq!(s.answer(fix), Action::LookAgain);
+        assert!(s.views().is_empty() && !s.positioned && matches!(s.phase, Phase::View));
+        s.cheapest = costing(poor);
+        assert_eq!(s.answer(fix), Action::Done(Ok(fix)), "the second look answers");
+        s.restart();
+        s.cheapest = costing(poor);
+        assert_eq!(s.answer(fix), Action::LookAgain, "a new procedure");
+        let mut s = surveyed(&[10.0, 55.0, 100.0, 145.0]);
+        s.cheapest = costing(config::refine::SECOND_LOOK_FIT - 0.1);
+        assert_eq!(s.answer(fix), Action::Done(Ok(fix)), "a fit within the limit");
     }
 
     /// Without the refinement the search reads every view, repeats too.

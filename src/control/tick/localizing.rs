@@ -80,6 +80,13 @@ impl<H: Hardware> Controller<H> {
     pub(super) fn locate_tick(&mut self, sink: &mut impl LineSink) {
         let motion = match self.localizing.survey.tick(&self.estimator.arena()) {
             Action::Done(result) => return self.end_locate(result, sink),
+            Action::LookAgain => {
+                if let Mode::Locate { timer, .. } = &mut self.mode {
+                    *timer = Timer::new(Some(config::locate::TIME_LIMIT_MS));
+                }
+                sink.write_line("# looking again from elsewhere: a poor fit");
+                Motion::Stop
+            }
             Action::Stand => Motion::Stop,
             Action::Turn { clockwise } => {
                 let rate = TurnRate::from_mrad_s(config::locate::TURN_MRAD_S);
