@@ -150,6 +150,9 @@ pub const SCORES_PER_TICK: u32 = 170;
 /// for both looks cut short the second looks that began late: set A of
 /// docs/simulator.md 8 out of time, 973 right against 980.)
 pub const TIME_LIMIT_MS: u32 = 120_000;
+/// The longest a localization takes, ms: a first look and a second
+/// (`config::refine::SECOND_LOOK_FIT`), each within its limit.
+pub const LONGEST_MS: u32 = 2 * TIME_LIMIT_MS;
 /// The survey's turns in place are planned to pivot this far behind the
 /// reference point, mm: `goto`'s planned centre (`goto::TURN_CENTRE_
 /// BEHIND_REFERENCE`, at the skid), the conservative end for the walls;

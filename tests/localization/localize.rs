@@ -49,7 +49,7 @@ fn power_up(start: PoseF64, seed: u64, realism: Realism, refine: bool) -> Run {
     let mut robot = SimRobot::new(SimConfig { start, seed, realism, refine, ..SimConfig::default() });
     assert_eq!(robot.take_output(), ["# ok locate"]);
     robot.send("rate 0");
-    let limit_ticks = (2 * paperbot::config::locate::TIME_LIMIT_MS + 1_000) / 10;
+    let limit_ticks = (paperbot::config::locate::LONGEST_MS + 1_000) / 10;
     let mut looked_again = false;
     for _ in 0..limit_ticks {
         robot.tick();

@@ -117,7 +117,7 @@ fn laps(realism: Realism, seed: u64, start: Start) -> Run {
     let locate_at_power_up = start == Start::Localized;
     let mut robot = SimRobot::new(SimConfig { seed, realism, locate_at_power_up, ..SimConfig::default() });
     robot.send("rate 0");
-    let limit = (config::locate::TIME_LIMIT_MS + 1_000) / 10;
+    let limit = (config::locate::LONGEST_MS + 1_000) / 10;
     let located = !locate_at_power_up
         || (0..limit).any(|_| {
             robot.tick();

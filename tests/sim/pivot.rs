@@ -66,7 +66,7 @@ fn a_localization_keeps_what_was_learned_and_a_typed_pose_forgets_it() {
     let centre = robot.controller().estimator().learned_turn_centre().unwrap();
     assert!((centre.to_mm_f64() - 56.0 - learned.0.to_mm_f64()).abs() < 1e-3, "{centre:?}");
     robot.send("locate");
-    for _ in 0..(paperbot::config::locate::TIME_LIMIT_MS / 10) {
+    for _ in 0..(paperbot::config::locate::LONGEST_MS / 10) {
         robot.tick();
         if robot.take_output().iter().any(|l| l.starts_with("# located ")) {
             break;

@@ -90,7 +90,7 @@ fn a_localization_keeps_the_share_and_a_typed_pose_forgets_it() {
     let learned = robot.controller().estimator().lidar_spot();
     assert!(learned.1 > 0 && learned.0 > 0, "{learned:?}");
     robot.send("locate");
-    for _ in 0..(paperbot::config::locate::TIME_LIMIT_MS / 10) {
+    for _ in 0..(paperbot::config::locate::LONGEST_MS / 10) {
         robot.tick();
         if robot.take_output().iter().any(|l| l.starts_with("# located ")) {
             break;

@@ -28,7 +28,7 @@ fn lab_with_hard_pivot() -> Realism {
 fn survey(start: PoseF64, seed: u64, realism: Realism) -> (u32, String, f64) {
     let mut robot = SimRobot::new(SimConfig { start, seed, realism, ..SimConfig::default() });
     robot.send("rate 0");
-    for _ in 0..(config::locate::TIME_LIMIT_MS + 1_000) / 10 {
+    for _ in 0..(config::locate::LONGEST_MS + 1_000) / 10 {
         robot.tick();
         if let Some(line) = robot.take_output().into_iter().find(|l| l.starts_with("# locate")) {
             let s = robot.sample();
