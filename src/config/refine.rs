@@ -131,6 +131,8 @@ pub const FIT_LIMIT: f64 = 2.0;
 /// ... and no fit [`RIVAL_MM`] or [`RIVAL_DEG`] away costs within this
 /// more (twice the log of a likelihood ratio of 12).
 pub const RIVAL_GAP: f64 = 5.0;
+pub const RIVAL_MM: i32 = 30;
+pub const RIVAL_DEG: f64 = 5.0;
 /// A survey whose refined answer costs more than this a reading (its
 /// readings explain no place well: the refinement does not vouch for it)
 /// looks again from elsewhere: a second survey, begun with its drive to
@@ -147,8 +149,6 @@ pub const RIVAL_GAP: f64 = 5.0;
 /// (`tests/localization/localize.rs`). The limit is the refinement's own
 /// ([`FIT_LIMIT`]), not chosen by those counts.
 pub const SECOND_LOOK_FIT: f64 = FIT_LIMIT;
-pub const RIVAL_MM: i32 = 30;
-pub const RIVAL_DEG: f64 = 5.0;
 /// A refined fit that costs more than this a reading may rest on a wrong
 /// place (the search's heading was the compass's, disturbed), so the
 /// search goes on ([`SEARCH_ON_STEPS`]) and the cheapest fit is the

@@ -289,7 +289,8 @@ impl Survey {
     }
 
     /// A second look from elsewhere: the procedure begun again, its drive
-    /// to make room first, with its time (the controller's) running on.
+    /// to make room first (the controller begins its time limit again on
+    /// [`Action::LookAgain`]).
     fn look_again(&mut self) {
         self.restart();
         self.second_look = true;

@@ -275,7 +275,9 @@ fn a_poor_fit_makes_the_search_go_on() {
 /// elsewhere: a second survey, begun with its drive to make room, answers
 /// instead. Set A's starts 97, 107, 194, 205 and 222 were located 38 to
 /// 371 mm off, reported uncertain at 2.5 to 3.6 a reading: each says it
-/// looks again and is located within 30 mm and 5 degrees now.
+/// looks again and is located within 30 mm and 5 degrees now. Start 107
+/// answers 140 s after power-up: its second look has a time limit of its
+/// own (with one limit for both, it ran out of time).
 #[test]
 fn a_poor_fit_looks_again_from_elsewhere() {
     let mut rng = Rng::new(HELD_OUT[0].starts_seed);

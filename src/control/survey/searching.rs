@@ -13,7 +13,7 @@ use crate::config;
 use crate::config::locate::MIN_VIEWS;
 use crate::control::goto::position_steerable;
 use crate::math::Angle;
-use crate::model::locate::refine::{Refine, Refined};
+use crate::model::locate::refine::{worth_a_second_look, Refine, Refined};
 use crate::model::locate::{Fix, LocateError, Readings, Search, MAX_VIEWS};
 
 /// The cheapest refined fit so far while the search goes on past fits
@@ -64,8 +64,6 @@ fn unrepeated(views: &[Readings]) -> impl Iterator<Item = Readings> + '_ {
 /// procedure's ticks it may go on until.
 const LAST_TRY_ON: u8 = config::refine::SEARCH_ON_STEPS.saturating_mul(2);
 const SEARCH_ON_TICKS: u32 = ticks(config::refine::SEARCH_ON_MS);
-/// [`config::refine::SECOND_LOOK_FIT`], Q24 (as [`Cheapest::per_reading`]).
-const SECOND_LOOK_FIT: i64 = (config::refine::SECOND_LOOK_FIT * (1u32 << 24) as f64) as i64;
 
 impl Survey {
     /// The views the search reads: all of them without the refinement;
@@ -249,7 +247,7 @@ impl Survey {
     /// fits poorly ([`config::refine::SECOND_LOOK_FIT`]) on the first
     /// look, a second look from elsewhere instead (see the module docs).
     fn answer(&mut self, fix: Fix) -> Action {
-        let poor = self.cheapest.is_some_and(|c| c.per_reading > SECOND_LOOK_FIT);
+        let poor = self.cheapest.is_some_and(|c| worth_a_second_look(c.per_reading));
         if poor && !self.second_look {
             self.look_again();
             return Action::LookAgain;

@@ -79,6 +79,7 @@ const fn q24(v: f64) -> i64 {
 const AWAY_MARGIN: i64 = q24(cfg::AWAY_MARGIN);
 const FIT_LIMIT: i64 = q24(cfg::FIT_LIMIT);
 const SEARCH_ON_LIMIT: i64 = q24(cfg::SEARCH_ON_LIMIT);
+const SECOND_LOOK_FIT: i64 = q24(cfg::SECOND_LOOK_FIT);
 const WELL_FIT: i32 = q24(cfg::WELL_FIT) as i32;
 const RIVAL_GAP: i64 = q24(cfg::RIVAL_GAP);
 const RIVAL_ANGLE: i32 = Angle::from_degrees_f64(cfg::RIVAL_DEG).0 as i32;
@@ -110,6 +111,13 @@ impl Refined {
     pub fn poor(&self) -> bool {
         self.per_reading > SEARCH_ON_LIMIT
     }
+}
+
+/// A fit costing `per_reading` a reading (Q24, as
+/// [`Refined::per_reading`]) explains no place well enough to report on
+/// a survey's first look ([`cfg::SECOND_LOOK_FIT`]).
+pub fn worth_a_second_look(per_reading: i64) -> bool {
+    per_reading > SECOND_LOOK_FIT
 }
 
 /// Where a start ended.
