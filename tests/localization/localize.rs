@@ -280,10 +280,7 @@ fn a_poor_fit_makes_the_search_go_on() {
 /// own (with one limit for both, it ran out of time).
 #[test]
 fn a_poor_fit_looks_again_from_elsewhere() {
-    let mut rng = Rng::new(HELD_OUT[0].starts_seed);
-    let poses: Vec<PoseF64> = (0..1_000).map(|_| random_pose_in_box(&mut rng)).collect();
-    for i in [97, 107, 194, 205, 222] {
-        let run = power_up(poses[i], HELD_OUT[0].first_seed + i as u64, Realism::HARD, true);
+    for (i, run) in power_ups_at(HELD_OUT[0], Realism::HARD, &[97, 107, 194, 205, 222]) {
         assert!(run.looked_again, "start {i}: {}", run.line);
         run.assert_located_right(format_args!("start {i}"));
     }
@@ -298,11 +295,16 @@ fn power_ups_are_right(realism: Realism, starts: &[usize]) {
 
 /// [`power_ups_are_right`] for the power-ups of `set`.
 fn power_ups_of_are_right(set: Set, realism: Realism, starts: &[usize]) {
+    for (i, run) in power_ups_at(set, realism, starts) {
+        run.assert_located_right(format_args!("start {i}"));
+    }
+}
+
+/// The refined power-ups `starts` of `set`'s 1,000, each with its index.
+fn power_ups_at(set: Set, realism: Realism, starts: &[usize]) -> Vec<(usize, Run)> {
     let mut rng = Rng::new(set.starts_seed);
     let poses: Vec<PoseF64> = (0..1_000).map(|_| random_pose_in_box(&mut rng)).collect();
-    for &i in starts {
-        power_up(poses[i], set.first_seed + i as u64, realism, true).assert_located_right(format_args!("start {i}"));
-    }
+    starts.iter().map(|&i| (i, power_up(poses[i], set.first_seed + i as u64, realism, true))).collect()
 }
 
 /// A search of the last views (`config::refine::SEARCH_VIEWS`) that finds

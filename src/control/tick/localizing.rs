@@ -58,7 +58,7 @@ impl<H: Hardware> Controller<H> {
         self.localizing.restart();
         // the search reads the ranges as the estimator has learned to
         self.localizing.survey.set_spot_share(self.estimator.lidar_spot().0);
-        self.mode = Mode::Locate { drive: self.model.stop(), timer: Timer::new(Some(config::locate::TIME_LIMIT_MS)) };
+        self.mode = Mode::Locate { drive: self.model.stop(), timer: look_timer() };
     }
 
     /// While locating, this tick's readings go to the procedure's view
@@ -82,7 +82,7 @@ impl<H: Hardware> Controller<H> {
             Action::Done(result) => return self.end_locate(result, sink),
             Action::LookAgain => {
                 if let Mode::Locate { timer, .. } = &mut self.mode {
-                    *timer = Timer::new(Some(config::locate::TIME_LIMIT_MS));
+                    *timer = look_timer();
                 }
                 sink.write_line("# looking again from elsewhere: a poor fit");
                 Motion::Stop
@@ -177,4 +177,10 @@ fn flag_text(fix: &Fix) -> &'static str {
     } else {
         ""
     }
+}
+
+/// A look's time limit ([`config::locate::TIME_LIMIT_MS`]): the
+/// procedure's, begun again by a second look.
+fn look_timer() -> Timer {
+    Timer::new(Some(config::locate::TIME_LIMIT_MS))
 }
